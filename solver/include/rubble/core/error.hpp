@@ -1,0 +1,27 @@
+#pragma once
+// Errors a user can act on. InputError names the file, the key and the
+// problem; the command-line program prints what() and exits non-zero.
+#include <stdexcept>
+#include <string>
+
+namespace rubble {
+
+class InputError : public std::runtime_error {
+ public:
+  InputError(const std::string& file, const std::string& key, const std::string& problem)
+      : std::runtime_error(file + ": " + (key.empty() ? std::string() : "key '" + key + "': ") + problem),
+        file_(file), key_(key) {}
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+
+ private:
+  std::string file_, key_;
+};
+
+// A run that cannot go on (non-finite value, collapsing time step).
+class RunError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace rubble

@@ -1,0 +1,149 @@
+#pragma once
+// Particles as a structure of arrays: one std::vector per field.
+//
+// Which fields exist, their units, whether they are evolved in time or
+// derived, and whether snapshots carry them is described once, in the field
+// table below (kFieldTable). Fields a scene does not need stay empty
+// (size 0): `allocate()` sizes only the fields the run's feature set asks for,
+// and `allocated_fields()` lists them so tests can check that nothing else
+// was allocated.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "rubble/core/real.hpp"
+#include "rubble/core/vec.hpp"
+
+namespace rubble {
+
+// What a run needs; decided once from the scene.
+struct FieldNeeds {
+  bool continuity_density = false;  // rho is evolved (d rho/dt stored)
+  bool summation_density = false;   // grad-h factor omega is stored
+  bool conductivity = false;
+};
+
+template <int D>
+struct ParticleStore {
+  std::size_t n = 0;
+
+  // constants of each particle
+  std::vector<Real> m;                    // mass [kg]
+  std::vector<std::int32_t> material_id;  // index into the scene's materials
+
+  // evolved state
+  std::vector<Vec<D>> x;  // position [m]
+  std::vector<Vec<D>> v;  // velocity [m/s]
+  std::vector<Real> u;    // specific internal energy [J/kg]
+  std::vector<Real> rho;  // density [kg/m^3] (evolved or summed)
+  std::vector<Real> h;    // smoothing length = kernel support radius [m]
+
+  // derived each evaluation
+  std::vector<Real> p;      // pressure [Pa]
+  std::vector<Real> cs;     // sound speed [m/s]
+  std::vector<Real> omega;  // grad-h correction factor Omega (summation density)
+
+  // time derivatives
+  std::vector<Vec<D>> dvdt;   // acceleration [m/s^2]
+  std::vector<Real> dudt;     // [J/kg/s]
+  std::vector<Real> drhodt;   // [kg/m^3/s] (continuity density only)
+  std::vector<Real> dhdt;     // [m/s] (continuity density only)
+  std::vector<Real> vsig_max; // largest signal speed seen by the particle [m/s]
+
+  void allocate(std::size_t count, const FieldNeeds& needs);
+  // Apply a permutation: new particle i is old particle perm[i].
+  void permute(const std::vector<std::uint32_t>& perm);
+  std::vector<std::string> allocated_fields() const;
+};
+
+// ---- the field table -----------------------------------------------------
+
+enum class FieldRole { Constant, Evolved, Derived, Rate };
+
+template <int D>
+using FieldMember = std::variant<std::vector<Real> ParticleStore<D>::*,
+                                 std::vector<Vec<D>> ParticleStore<D>::*,
+                                 std::vector<std::int32_t> ParticleStore<D>::*>;
+
+template <int D>
+struct FieldInfo {
+  std::string_view name;  // dataset name in snapshots
+  FieldMember<D> member;
+  std::string_view unit;
+  FieldRole role;
+  bool snapshot;  // written to snapshots when allocated
+};
+
+template <int D>
+inline const std::vector<FieldInfo<D>>& field_table() {
+  using S = ParticleStore<D>;
+  static const std::vector<FieldInfo<D>> table = {
+      {"x", &S::x, "m", FieldRole::Evolved, true},
+      {"v", &S::v, "m/s", FieldRole::Evolved, true},
+      {"m", &S::m, "kg", FieldRole::Constant, true},
+      {"rho", &S::rho, "kg/m^3", FieldRole::Evolved, true},
+      {"p", &S::p, "Pa", FieldRole::Derived, true},
+      {"u", &S::u, "J/kg", FieldRole::Evolved, true},
+      {"h", &S::h, "m", FieldRole::Evolved, true},
+      {"cs", &S::cs, "m/s", FieldRole::Derived, true},
+      {"material_id", &S::material_id, "1", FieldRole::Constant, true},
+      {"omega", &S::omega, "1", FieldRole::Derived, false},
+      {"dvdt", &S::dvdt, "m/s^2", FieldRole::Rate, false},
+      {"dudt", &S::dudt, "J/kg/s", FieldRole::Rate, false},
+      {"drhodt", &S::drhodt, "kg/m^3/s", FieldRole::Rate, false},
+      {"dhdt", &S::dhdt, "m/s", FieldRole::Rate, false},
+      {"vsig_max", &S::vsig_max, "m/s", FieldRole::Derived, false},
+  };
+  return table;
+}
+
+// ---- implementation -------------------------------------------------------
+
+template <int D>
+void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
+  n = count;
+  m.assign(n, 0);
+  material_id.assign(n, 0);
+  x.assign(n, Vec<D>::zero());
+  v.assign(n, Vec<D>::zero());
+  u.assign(n, 0);
+  rho.assign(n, 0);
+  h.assign(n, 0);
+  p.assign(n, 0);
+  cs.assign(n, 0);
+  dvdt.assign(n, Vec<D>::zero());
+  dudt.assign(n, 0);
+  vsig_max.assign(n, 0);
+  if (needs.summation_density) omega.assign(n, 1);
+  if (needs.continuity_density) {
+    drhodt.assign(n, 0);
+    dhdt.assign(n, 0);
+  }
+}
+
+template <int D>
+void ParticleStore<D>::permute(const std::vector<std::uint32_t>& perm) {
+  for (const auto& f : field_table<D>()) {
+    std::visit(
+        [&](auto member) {
+          auto& arr = this->*member;
+          if (arr.empty()) return;
+          auto old = arr;
+          for (std::size_t i = 0; i < n; ++i) arr[i] = old[perm[i]];
+        },
+        f.member);
+  }
+}
+
+template <int D>
+std::vector<std::string> ParticleStore<D>::allocated_fields() const {
+  std::vector<std::string> names;
+  for (const auto& f : field_table<D>())
+    std::visit([&](auto member) { if (!(this->*member).empty()) names.emplace_back(f.name); }, f.member);
+  return names;
+}
+
+}  // namespace rubble
