@@ -50,8 +50,7 @@ struct ParticleStore {
   std::vector<Vec<D>> dvdt;   // acceleration [m/s^2]
   std::vector<Real> dudt;     // [J/kg/s]
   std::vector<Real> drhodt;   // [kg/m^3/s] (continuity density only)
-  std::vector<Real> dhdt;     // [m/s] (continuity density only)
-  std::vector<Real> vsig_max; // largest signal speed seen by the particle [m/s]
+  std::vector<Real> mu_max;   // largest viscous approach speed |mu_ab| seen [m/s]
 
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
@@ -94,8 +93,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"dvdt", &S::dvdt, "m/s^2", FieldRole::Rate, false},
       {"dudt", &S::dudt, "J/kg/s", FieldRole::Rate, false},
       {"drhodt", &S::drhodt, "kg/m^3/s", FieldRole::Rate, false},
-      {"dhdt", &S::dhdt, "m/s", FieldRole::Rate, false},
-      {"vsig_max", &S::vsig_max, "m/s", FieldRole::Derived, false},
+      {"mu_max", &S::mu_max, "m/s", FieldRole::Derived, false},
   };
   return table;
 }
@@ -116,11 +114,10 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   cs.assign(n, 0);
   dvdt.assign(n, Vec<D>::zero());
   dudt.assign(n, 0);
-  vsig_max.assign(n, 0);
+  mu_max.assign(n, 0);
   if (needs.summation_density) omega.assign(n, 1);
   if (needs.continuity_density) {
     drhodt.assign(n, 0);
-    dhdt.assign(n, 0);
   }
 }
 

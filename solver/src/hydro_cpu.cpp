@@ -1,0 +1,196 @@
+#include "hydro_cpu.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "rubble/core/error.hpp"
+#include "rubble/neighbors/spatial_order.hpp"
+#include "rubble/physics/hydro.hpp"
+#include "rubble/physics/kernels.hpp"
+#include "rubble/physics/smoothing_length.hpp"
+#include "rubble/physics/timestep.hpp"
+
+namespace rubble {
+
+std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
+  std::vector<MaterialParams> out;
+  for (const auto& m : scene.materials) {
+    MaterialParams p{};
+    p.eos.kind = EosKind::IdealGas;
+    p.eos.ideal_gas.gamma = Real(m.gamma);
+    p.av = {Real(m.viscosity.alpha), Real(m.viscosity.beta)};
+    p.alpha_u = m.conductivity.enabled ? Real(m.conductivity.alpha_u) : Real(0);
+    out.push_back(p);
+  }
+  return out;
+}
+
+template <int D>
+HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain)
+    : ps_(ps),
+      domain_(domain),
+      materials_(material_params_from_scene(scene)),
+      kernel_(scene.simulation.kernel),
+      hfact_(Real(scene.simulation.hfact > 0 ? scene.simulation.hfact
+                                              : kernel_default_hfact(scene.simulation.kernel))),
+      courant_(Real(scene.simulation.courant)),
+      force_factor_(Real(scene.simulation.force_factor)),
+      summation_(scene.simulation.density == DensityForm::Summation) {}
+
+template <int D>
+void HydroCpu<D>::sort_particles() {
+  const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
+  ps_.permute(spatial_sort_permutation<D>(ps_.x.data(), ps_.n, box));
+}
+
+template <int D>
+void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius) {
+  const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
+  cells_.build(ps_.x.data(), search_radius.data(), ps_.n, box);
+  cells_.find_neighbors(nbrs_);
+  ++rebuilds_;
+}
+
+// Summation density with h and rho solved together (smoothing_length.hpp).
+// The neighbour lists are built with a search radius 15 % above the current
+// h; a particle whose h grows past its search radius triggers a rebuild.
+template <int D>
+void HydroCpu<D>::summation_density_and_h() {
+  const std::size_t n = ps_.n;
+  constexpr Real kSkin = Real(1.15);
+  constexpr int kMaxNewton = 50;
+  const Real tol = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  search_radius_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) search_radius_[i] = kSkin * ps_.h[i];
+
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    build_neighbors(search_radius_);
+    int outgrown = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : outgrown)
+    for (std::size_t a = 0; a < n; ++a) {
+      Real h = std::min(ps_.h[a], search_radius_[a]);
+      Real rho = 0, dwdh = 0;
+      for (int it = 0; it < kMaxNewton; ++it) {
+        rho = ps_.m[a] * kernel_w<D>(kernel_, Real(0), h);
+        dwdh = ps_.m[a] * kernel_dwdh<D>(kernel_, Real(0), h);
+        for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+          const std::uint32_t b = nbrs_.index[k];
+          const Real r = norm(domain_.separation(ps_.x[a], ps_.x[b]));
+          if (r >= h) continue;
+          rho += ps_.m[b] * kernel_w<D>(kernel_, r, h);
+          dwdh += ps_.m[b] * kernel_dwdh<D>(kernel_, r, h);
+        }
+        const Real h_new = newton_h_step<D>(h, rho, dwdh, hfact_, ps_.m[a]);
+        const bool converged = std::fabs(h_new - h) <= tol * h;
+        if (h_new > search_radius_[a]) {  // needs more neighbours than listed
+          h = h_new;
+          break;
+        }
+        h = h_new;
+        if (converged) break;
+      }
+      if (h > search_radius_[a]) {
+        search_radius_[a] = kSkin * h;
+        ps_.h[a] = h;
+        ++outgrown;
+        continue;
+      }
+      // Final density and Omega at the converged h.
+      rho = ps_.m[a] * kernel_w<D>(kernel_, Real(0), h);
+      dwdh = ps_.m[a] * kernel_dwdh<D>(kernel_, Real(0), h);
+      for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+        const std::uint32_t b = nbrs_.index[k];
+        const Real r = norm(domain_.separation(ps_.x[a], ps_.x[b]));
+        if (r >= h) continue;
+        rho += ps_.m[b] * kernel_w<D>(kernel_, r, h);
+        dwdh += ps_.m[b] * kernel_dwdh<D>(kernel_, r, h);
+      }
+      ps_.h[a] = h;
+      ps_.rho[a] = rho;
+      ps_.omega[a] = grad_h_omega<D>(h, rho, dwdh);
+    }
+    if (outgrown == 0) {
+      // The force loop needs all pairs within max(h_a, h_b): the lists hold
+      // all pairs within max(search_a, search_b) >= that.
+      return;
+    }
+  }
+  throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
+}
+
+template <int D>
+void HydroCpu<D>::h_from_continuity_density() {
+  const std::size_t n = ps_.n;
+#pragma omp parallel for
+  for (std::size_t a = 0; a < n; ++a) ps_.h[a] = h_from_density<D>(hfact_, ps_.m[a], ps_.rho[a]);
+  build_neighbors(ps_.h);
+}
+
+template <int D>
+void HydroCpu<D>::equation_of_state() {
+  const std::size_t n = ps_.n;
+#pragma omp parallel for
+  for (std::size_t a = 0; a < n; ++a) {
+    const EosState s = eos_evaluate(materials_[ps_.material_id[a]].eos, ps_.rho[a], ps_.u[a]);
+    ps_.p[a] = s.p;
+    ps_.cs[a] = std::sqrt(std::max(s.c2, Real(0)));
+  }
+}
+
+template <int D>
+void HydroCpu<D>::rates() {
+  const std::size_t n = ps_.n;
+  auto particle = [&](std::size_t i) {
+    const MaterialParams& mat = materials_[ps_.material_id[i]];
+    return HydroParticle<D>{ps_.x[i], ps_.v[i], ps_.m[i], ps_.rho[i], ps_.p[i], ps_.u[i], ps_.h[i],
+                            summation_ ? ps_.omega[i] : Real(1), ps_.cs[i], mat.av, mat.alpha_u};
+  };
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t a = 0; a < n; ++a) {
+    const HydroParticle<D> pa = particle(a);
+    Vec<D> dvdt = Vec<D>::zero();
+    Real dudt = 0, drhodt = 0, mu_max = 0;
+    for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+      const std::uint32_t b = nbrs_.index[k];
+      const HydroPairRates<D> r = hydro_pair<D>(kernel_, pa, particle(b), domain_.separation(ps_.x[a], ps_.x[b]));
+      dvdt += r.dvdt;
+      dudt += r.dudt;
+      drhodt += r.drhodt;
+      mu_max = std::max(mu_max, r.mu);
+    }
+    ps_.dvdt[a] = dvdt;
+    ps_.dudt[a] = dudt;
+    if (!summation_) ps_.drhodt[a] = drhodt;
+    ps_.mu_max[a] = mu_max;
+  }
+}
+
+template <int D>
+void HydroCpu<D>::evaluate() {
+  if (summation_) summation_density_and_h();
+  else h_from_continuity_density();
+  equation_of_state();
+  rates();
+}
+
+template <int D>
+Real HydroCpu<D>::dt_limit() const {
+  const std::size_t n = ps_.n;
+  Real dt = Real(1e30);
+#pragma omp parallel for reduction(min : dt)
+  for (std::size_t a = 0; a < n; ++a) {
+    const MaterialParams& mat = materials_[ps_.material_id[a]];
+    const Real hM = monaghan_h(ps_.h[a]);
+    const Real dt_c = courant_dt(courant_, hM, ps_.cs[a], mat.av.alpha, mat.av.beta, ps_.mu_max[a]);
+    const Real dt_f = force_dt(force_factor_, hM, norm(ps_.dvdt[a]));
+    dt = std::min(dt, std::min(dt_c, dt_f));
+  }
+  return dt;
+}
+
+template class HydroCpu<1>;
+template class HydroCpu<2>;
+template class HydroCpu<3>;
+
+}  // namespace rubble

@@ -1,0 +1,122 @@
+#include "rubble/scene/initial_conditions.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "hydro_cpu.hpp"
+#include "rubble/core/error.hpp"
+#include "rubble/physics/smoothing_length.hpp"
+
+namespace rubble {
+
+template <int D>
+double lattice_cell_volume(Lattice lattice, double dx) {
+  if (lattice == Lattice::HexagonalClosePacked) {
+    if constexpr (D == 2) return std::sqrt(3.0) / 2.0 * dx * dx;
+    if constexpr (D == 3) return dx * dx * dx / std::sqrt(2.0);
+  }
+  double v = 1;
+  for (int k = 0; k < D; ++k) v *= dx;
+  return v;
+}
+
+namespace {
+
+// Lattice points inside [lo, hi). Cubic: cell centres. Hexagonal / HCP:
+// rows offset by dx/2, layers (3-D) in the A-B stacking of close packing.
+template <int D>
+std::vector<Vec<D>> lattice_points(const BodyConfig& b) {
+  std::vector<Vec<D>> pts;
+  const double dx = b.spacing;
+  const bool hex = b.lattice == Lattice::HexagonalClosePacked && D >= 2;
+  // spacing between rows (y) and layers (z)
+  const double dy = hex ? dx * std::sqrt(3.0) / 2.0 : dx;
+  const double dz = hex ? dx * std::sqrt(2.0 / 3.0) : dx;
+  const double step[3] = {dx, dy, dz};
+  long count[3] = {1, 1, 1};
+  for (int k = 0; k < D; ++k) count[k] = std::lround(std::floor((b.max[k] - b.min[k]) / step[k] + 1e-9));
+  for (long k2 = 0; k2 < count[2]; ++k2)
+    for (long k1 = 0; k1 < count[1]; ++k1)
+      for (long k0 = 0; k0 < count[0]; ++k0) {
+        const long idx[3] = {k0, k1, k2};
+        Vec<D> x;
+        for (int k = 0; k < D; ++k) x[k] = Real(b.min[k] + (idx[k] + 0.5) * step[k]);
+        if (hex) {
+          // odd rows shift by dx/2; odd layers shift by (dx/2, dy/3). A point
+          // shifted past the box wraps to its far side, so a box whose sides
+          // are whole lattice periods tiles periodically.
+          x[0] += Real(0.5 * dx * ((k1 + k2) % 2));
+          if constexpr (D == 3) x[1] += Real(dy / 3.0 * (k2 % 2));
+          for (int k = 0; k < 2; ++k)
+            if (x[k] >= b.max[k]) x[k] -= Real(b.max[k] - b.min[k]);
+        }
+        bool inside = true;
+        for (int k = 0; k < D; ++k) inside = inside && x[k] >= b.min[k] && x[k] < b.max[k];
+        if (inside) pts.push_back(x);
+      }
+  return pts;
+}
+
+}  // namespace
+
+template <int D>
+void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, ParticleStore<D>& ps) {
+  const auto materials = material_params_from_scene(scene);
+  std::vector<std::vector<Vec<D>>> body_points;
+  std::size_t total = 0;
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    body_points.push_back(lattice_points<D>(scene.bodies[i]));
+    if (body_points.back().empty())
+      throw InputError(scene.file, "bodies[" + std::to_string(i) + "].spacing",
+                       "the body holds no particle: spacing is larger than the box");
+    total += body_points.back().size();
+  }
+  ps.allocate(total, needs);
+
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const BodyConfig& b = scene.bodies[i];
+    const std::string key = "bodies[" + std::to_string(i) + "]";
+    const double m = b.density * lattice_cell_volume<D>(b.lattice, b.spacing);
+    const EosParams& eos = materials[b.material_id].eos;
+    const double u = b.pressure >= 0 ? eos_internal_energy_from_pressure(eos, Real(b.density), Real(b.pressure))
+                                     : b.internal_energy;
+    if (!std::isfinite(u) || u < 0)
+      throw InputError(scene.file, key, "initial internal energy is not finite and non-negative");
+    for (const Vec<D>& x : body_points[i]) {
+      ps.x[next] = x;
+      for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
+      ps.m[next] = Real(m);
+      ps.material_id[next] = b.material_id;
+      ps.rho[next] = Real(b.density);
+      ps.u[next] = Real(u);
+      ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));
+      for (int k = 0; k < D; ++k)
+        if (!std::isfinite(ps.x[next][k]) || !std::isfinite(ps.v[next][k]))
+          throw InputError(scene.file, key, "initial position or velocity is not finite");
+      ++next;
+    }
+  }
+}
+
+template <int D>
+Box<D> domain_from_scene(const Scene& scene) {
+  Box<D> box;
+  for (int k = 0; k < D; ++k) {
+    box.periodic[k] = scene.domain.periodic[k];
+    box.lo[k] = Real(scene.domain.min[k]);
+    box.hi[k] = Real(scene.domain.max[k]);
+  }
+  return box;
+}
+
+#define RUBBLE_INSTANTIATE(D)                                                                      \
+  template double lattice_cell_volume<D>(Lattice, double);                                         \
+  template void generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&);    \
+  template Box<D> domain_from_scene<D>(const Scene&);
+RUBBLE_INSTANTIATE(1)
+RUBBLE_INSTANTIATE(2)
+RUBBLE_INSTANTIATE(3)
+#undef RUBBLE_INSTANTIATE
+
+}  // namespace rubble

@@ -1,0 +1,654 @@
+// Scene parser: TOML text (+ --set overrides) -> a validated Scene with every
+// default filled in. This is the only file that knows TOML. Every key is
+// documented in docs/scene.md.
+//
+// Principle 8 ("fail loudly, lose nothing"): anything we do not understand is
+// an InputError naming the file, the full key (simulation.end_time,
+// materials.gas.gamma, bodies[0].density) and the problem. Nothing is silently
+// ignored or silently defaulted to zero.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "rubble/core/error.hpp"
+#include "rubble/run.hpp"
+
+namespace rubble {
+namespace {
+
+// ---- small string helpers --------------------------------------------------
+
+std::string join(const std::vector<std::string>& words, const char* sep = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < words.size(); ++i) out += (i ? sep : "") + words[i];
+  return out;
+}
+
+std::string fmt(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", x);
+  return buf;
+}
+
+std::string trim(std::string_view s) {
+  const auto a = s.find_first_not_of(" \t\r\n");
+  if (a == std::string_view::npos) return {};
+  const auto b = s.find_last_not_of(" \t\r\n");
+  return std::string(s.substr(a, b - a + 1));
+}
+
+// Levenshtein distance, for "did you mean ...?" suggestions.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The candidate closest to `word`, or "" if none is plausibly a typo of it.
+std::string closest(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(2, word.size() / 3) + 1;
+  for (const auto& c : candidates) {
+    const std::size_t d = edit_distance(word, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  return best;
+}
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a floating-point number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "nothing";
+  }
+}
+
+std::string sub(const std::string& path, std::string_view name) {
+  return path.empty() ? std::string(name) : path + "." + std::string(name);
+}
+
+// [A-Za-z0-9_-]+ : material names and snapshot file stems.
+bool is_identifier(std::string_view s) {
+  if (s.empty()) return false;
+  for (char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// ---- --set overrides ----------------------------------------------------------
+
+// Apply one "dotted.key=value" override to the TOML tree. Returns the key in
+// message form (bodies[0].spacing) so errors about it can say where it came from.
+std::string apply_override(toml::table& root, const std::string& text, const std::string& file) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw InputError(file, "", "--set '" + text + "': expected dotted.key=value");
+  const std::string key = trim(std::string_view(text).substr(0, eq));
+  const std::string value = trim(std::string_view(text).substr(eq + 1));
+
+  std::vector<std::string> parts;
+  for (std::size_t start = 0;;) {
+    const auto dot = key.find('.', start);
+    parts.push_back(trim(std::string_view(key).substr(start, dot - start)));
+    if (dot == std::string::npos) break;
+    start = dot + 1;
+  }
+  for (const auto& p : parts)
+    if (p.empty()) throw InputError(file, key, "--set '" + text + "': empty component in the key");
+
+  // The value is TOML if it parses as TOML (0.5, true, "text", [1, 2],
+  // {alpha = 1}); otherwise it is taken as a plain string (hcp, leapfrog).
+  toml::table parsed;
+  try {
+    parsed = toml::parse("v = " + value);
+  } catch (const toml::parse_error&) {
+    parsed.clear();
+  }
+  if (parsed.size() != 1 || !parsed.contains("v")) {
+    parsed.clear();
+    parsed.insert("v", value);
+  }
+
+  // Walk (and create) tables; a numeric component indexes an array of tables.
+  toml::table* cur = &root;
+  std::string shown;  // the path so far, in message form
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    const std::string& part = parts[i];
+    toml::node* child = cur->get(part);
+    if (!child) child = cur->insert(part, toml::table{}).first->second.as_table();
+    shown = sub(shown, part);
+    if (auto* t = child->as_table()) {
+      cur = t;
+    } else if (auto* arr = child->as_array()) {
+      const bool numeric = i + 2 < parts.size() &&
+                           parts[i + 1].find_first_not_of("0123456789") == std::string::npos;
+      if (!numeric)
+        throw InputError(file, shown,
+                         "--set '" + text + "': '" + shown + "' is an array; index an array of tables " +
+                             "as in bodies.0.spacing=..., or set the whole array as in " + shown + "=[...]");
+      const std::size_t idx = std::stoul(parts[i + 1]);
+      if (idx >= arr->size())
+        throw InputError(file, shown,
+                         "--set '" + text + "': index " + parts[i + 1] + " is out of range ('" + shown +
+                             "' has " + std::to_string(arr->size()) + " entries)");
+      auto* t = (*arr)[idx].as_table();
+      if (!t)
+        throw InputError(file, shown, "--set '" + text + "': entry " + parts[i + 1] + " is not a table");
+      shown += "[" + parts[i + 1] + "]";
+      cur = t;
+      ++i;
+    } else {
+      throw InputError(file, shown,
+                       "--set '" + text + "': '" + shown + "' is " + type_name(*child) +
+                           ", not a table, so it has no key '" + parts[i + 1] + "'");
+    }
+  }
+  cur->insert_or_assign(parts.back(), std::move(*parsed.get("v")));
+  return sub(shown, parts.back());
+}
+
+// ---- the validating reader --------------------------------------------------------
+
+class SceneReader {
+ public:
+  SceneReader(std::string file, std::map<std::string, std::string> set_by)
+      : file_(std::move(file)), set_by_(std::move(set_by)) {}
+
+  Scene read(const toml::table& root);
+
+ private:
+  std::string file_;
+  std::map<std::string, std::string> set_by_;  // message key -> the --set text that wrote it
+  int dim_ = 0;
+
+  // Throw an InputError; where known, say the line or the --set that set the value.
+  [[noreturn]] void fail(const std::string& key, std::string problem, const toml::node* where = nullptr) const {
+    for (const auto& [k, text] : set_by_)
+      if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) {
+        problem += " (set by --set " + text + ")";
+        throw InputError(file_, key, problem);
+      }
+    if (where && where->source().begin.line > 0)
+      problem += " (line " + std::to_string(where->source().begin.line) + ")";
+    throw InputError(file_, key, problem);
+  }
+
+  // Every key of `t` must be in `known`; otherwise name it and suggest the closest.
+  void check_keys(const toml::table& t, const std::string& path, const std::vector<std::string>& known) const {
+    for (const auto& [k, node] : t) {
+      const std::string name(k.str());
+      if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+      const std::string guess = closest(name, known);
+      fail(sub(path, name),
+           "unknown key" + (guess.empty() ? "; known keys here: " + join(known)
+                                          : " (did you mean '" + sub(path, guess) + "'?)"),
+           &node);
+    }
+  }
+
+  const toml::table* table(const toml::table& t, std::string_view name, const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return nullptr;
+    if (!n->is_table()) fail(sub(path, name), "expected a table, got " + type_name(*n), n);
+    return n->as_table();
+  }
+
+  // A finite number (integers accepted), or nullopt when absent.
+  std::optional<double> number(const toml::table& t, std::string_view name, const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return std::nullopt;
+    return as_number(*n, sub(path, name), "");
+  }
+
+  double as_number(const toml::node& n, const std::string& key, const std::string& entry) const {
+    double x = 0;
+    if (auto* i = n.as_integer()) x = static_cast<double>(i->get());
+    else if (auto* f = n.as_floating_point()) x = f->get();
+    else fail(key, entry + "expected a number, got " + type_name(n), &n);
+    if (std::isnan(x)) fail(key, entry + "is NaN; every number must be finite (NaN in input data)", &n);
+    if (!std::isfinite(x)) fail(key, entry + "is infinite; every number must be finite", &n);
+    return x;
+  }
+
+  double required_number(const toml::table& t, std::string_view name, const std::string& path,
+                         const std::string& what) const {
+    const auto x = number(t, name, path);
+    if (!x) fail(sub(path, name), "missing required key (" + what + ")");
+    return *x;
+  }
+
+  // Check a condition on a number already read; `rule` is the condition in words.
+  void require(bool ok, const toml::table& t, std::string_view name, const std::string& path, double x,
+               const std::string& rule) const {
+    if (!ok) fail(sub(path, name), "is " + fmt(x) + ", must be " + rule, t.get(name));
+  }
+
+  std::optional<std::int64_t> integer(const toml::table& t, std::string_view name, const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return std::nullopt;
+    if (auto* i = n->as_integer()) return i->get();
+    // 1e7 is a fine way to write an integer; 2.5 is not.
+    if (auto* f = n->as_floating_point()) {
+      const double x = f->get();
+      if (std::isfinite(x) && x == std::floor(x) && std::fabs(x) < 9.0e18) return static_cast<std::int64_t>(x);
+    }
+    fail(sub(path, name), "expected an integer, got " + type_name(*n), n);
+  }
+
+  std::optional<bool> boolean(const toml::table& t, std::string_view name, const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return std::nullopt;
+    if (auto* b = n->as_boolean()) return b->get();
+    fail(sub(path, name), "expected true or false, got " + type_name(*n), n);
+  }
+
+  std::optional<std::string> string(const toml::table& t, std::string_view name, const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return std::nullopt;
+    if (auto* s = n->as_string()) return s->get();
+    fail(sub(path, name), "expected a string, got " + type_name(*n), n);
+  }
+
+  // A string from a fixed list of choices, mapped to an enum.
+  template <class E>
+  E choice(const toml::table& t, std::string_view name, const std::string& path, E fallback,
+           const std::vector<std::pair<std::string, E>>& options) const {
+    std::vector<std::string> names;
+    for (const auto& o : options) names.push_back(o.first);
+    const toml::node* n = t.get(name);
+    if (!n) return fallback;
+    if (!n->is_string()) fail(sub(path, name), "expected a string, one of: " + join(names) + "; got " + type_name(*n), n);
+    const std::string v = n->as_string()->get();
+    for (const auto& o : options)
+      if (o.first == v) return o.second;
+    const std::string guess = closest(v, names);
+    fail(sub(path, name),
+         "unknown value '" + v + "'; expected one of: " + join(names) +
+             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+         n);
+  }
+
+  // Exactly D finite numbers (one per axis), or nullopt when absent.
+  std::optional<std::array<double, 3>> vector(const toml::table& t, std::string_view name,
+                                              const std::string& path) const {
+    const toml::node* n = t.get(name);
+    if (!n) return std::nullopt;
+    const std::string key = sub(path, name);
+    const toml::array* arr = n->as_array();
+    if (!arr) fail(key, "expected an array of " + std::to_string(dim_) + " numbers, got " + type_name(*n), n);
+    check_length(*arr, key, n);
+    std::array<double, 3> out{};
+    for (int a = 0; a < dim_; ++a) out[a] = as_number((*arr)[a], key, "entry " + std::to_string(a) + " ");
+    return out;
+  }
+
+  void check_length(const toml::array& arr, const std::string& key, const toml::node* n) const {
+    if (arr.size() != static_cast<std::size_t>(dim_))
+      fail(key,
+           "expected " + std::to_string(dim_) + " entries (one per axis, simulation.dimension = " +
+               std::to_string(dim_) + "), got " + std::to_string(arr.size()),
+           n);
+  }
+
+  void read_simulation(const toml::table& root, SimulationConfig& s);
+  MaterialConfig read_material(const std::string& name, const toml::table& t);
+  BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
+  void read_domain(const toml::table& t, DomainConfig& d);
+  void read_output(const toml::table& t, OutputConfig& o);
+};
+
+void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) {
+  const std::string p = "simulation";
+  const toml::table* t = table(root, "simulation", "");
+  if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
+  check_keys(*t, p,
+             {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
+              "rk2_tolerance", "dt_initial", "dt_min", "max_steps"});
+
+  const auto dim = integer(*t, "dimension", p);
+  if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
+  if (*dim < 1 || *dim > 3) fail(p + ".dimension", "is " + std::to_string(*dim) + ", must be 1, 2 or 3", t->get("dimension"));
+  s.dimension = dim_ = static_cast<int>(*dim);
+
+  s.end_time = required_number(*t, "end_time", p, "the simulated time to run to [s], > 0");
+  require(s.end_time > 0, *t, "end_time", p, s.end_time, "> 0");
+
+  s.integrator = choice(*t, "integrator", p, Integrator::RK2Adaptive,
+                        {{"rk2_adaptive", Integrator::RK2Adaptive}, {"leapfrog", Integrator::Leapfrog}});
+  s.kernel = choice(*t, "kernel", p, KernelType::CubicSpline,
+                    {{"cubic_spline", KernelType::CubicSpline},
+                     {"wendland_c2", KernelType::WendlandC2},
+                     {"wendland_c4", KernelType::WendlandC4},
+                     {"wendland_c6", KernelType::WendlandC6}});
+  s.density = choice(*t, "density", p, DensityForm::Summation,
+                     {{"summation", DensityForm::Summation}, {"continuity", DensityForm::Continuity}});
+
+  if (auto x = number(*t, "hfact", p)) {
+    require(*x >= 0, *t, "hfact", p, *x, "> 0 (or 0 for the kernel's default)");
+    s.hfact = *x;
+  }
+  if (auto x = number(*t, "courant", p)) {
+    require(*x > 0 && *x <= 1, *t, "courant", p, *x, "in (0, 1]");
+    s.courant = *x;
+  }
+  if (auto x = number(*t, "force_factor", p)) {
+    require(*x > 0 && *x <= 1, *t, "force_factor", p, *x, "in (0, 1]");
+    s.force_factor = *x;
+  }
+  if (auto x = number(*t, "rk2_tolerance", p)) {
+    require(*x > 0, *t, "rk2_tolerance", p, *x, "> 0");
+    s.rk2_tolerance = *x;
+  }
+  if (auto x = number(*t, "dt_initial", p)) {
+    require(*x >= 0 && *x <= s.end_time, *t, "dt_initial", p, *x, ">= 0 and <= end_time (0 = automatic)");
+    s.dt_initial = *x;
+  }
+  if (auto x = number(*t, "dt_min", p)) {
+    require(*x >= 0 && *x < s.end_time, *t, "dt_min", p, *x, ">= 0 and < end_time (0 = 1e-12 * end_time)");
+    s.dt_min = *x;
+  }
+  if (s.dt_min == 0) s.dt_min = 1e-12 * s.end_time;
+  if (auto n = integer(*t, "max_steps", p)) {
+    if (*n <= 0) fail(p + ".max_steps", "is " + std::to_string(*n) + ", must be > 0", t->get("max_steps"));
+    s.max_steps = *n;
+  }
+}
+
+MaterialConfig SceneReader::read_material(const std::string& name, const toml::table& t) {
+  const std::string p = "materials." + name;
+  MaterialConfig m;
+  m.name = name;
+  if (!is_identifier(name)) fail(p, "material names may contain only letters, digits, '_' and '-'");
+
+  // The EOS decides which further keys belong here.
+  const auto eos = string(t, "eos", p);
+  if (!eos) fail(p + ".eos", "missing required key (the equation of state; one of: ideal_gas)");
+  if (*eos != "ideal_gas")
+    fail(p + ".eos", "unknown equation of state '" + *eos + "'; expected one of: ideal_gas", t.get("eos"));
+  m.eos = EosType::IdealGas;
+  check_keys(t, p, {"eos", "gamma", "viscosity", "conductivity"});
+
+  m.gamma = required_number(t, "gamma", p, "the ideal_gas EOS needs gamma, the adiabatic index, > 1");
+  require(m.gamma > 1, t, "gamma", p, m.gamma, "> 1");
+
+  if (const toml::table* v = table(t, "viscosity", p)) {
+    const std::string vp = p + ".viscosity";
+    check_keys(*v, vp, {"alpha", "beta"});
+    if (auto x = number(*v, "alpha", vp)) {
+      require(*x >= 0, *v, "alpha", vp, *x, ">= 0");
+      m.viscosity.alpha = *x;
+    }
+    if (auto x = number(*v, "beta", vp)) {
+      require(*x >= 0, *v, "beta", vp, *x, ">= 0");
+      m.viscosity.beta = *x;
+    }
+  }
+  if (const toml::table* c = table(t, "conductivity", p)) {
+    const std::string cp = p + ".conductivity";
+    check_keys(*c, cp, {"enabled", "alpha_u"});
+    if (auto b = boolean(*c, "enabled", cp)) m.conductivity.enabled = *b;
+    if (auto x = number(*c, "alpha_u", cp)) {
+      require(*x >= 0, *c, "alpha_u", cp, *x, ">= 0");
+      m.conductivity.alpha_u = *x;
+    }
+  }
+  return m;
+}
+
+BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
+                                  const std::vector<MaterialConfig>& mats) {
+  BodyConfig b;
+  check_keys(t, p,
+             {"shape", "material", "min", "max", "spacing", "lattice", "density", "pressure", "internal_energy",
+              "velocity"});
+
+  const auto shape = string(t, "shape", p);
+  if (!shape) fail(p + ".shape", "missing required key (one of: box)");
+  if (*shape != "box") fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box", t.get("shape"));
+  b.shape = BodyShape::Box;
+
+  const auto material = string(t, "material", p);
+  if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
+  std::vector<std::string> names;
+  for (const auto& m : mats) names.push_back(m.name);
+  const auto it = std::find(names.begin(), names.end(), *material);
+  if (it == names.end()) {
+    const std::string guess = closest(*material, names);
+    fail(p + ".material",
+         "unknown material '" + *material + "'; defined materials: " + join(names) +
+             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+         t.get("material"));
+  }
+  b.material = *material;
+  b.material_id = static_cast<int>(it - names.begin());
+
+  const auto lo = vector(t, "min", p);
+  if (!lo) fail(p + ".min", "missing required key (the box's lower corner, " + std::to_string(dim_) + " numbers [m])");
+  const auto hi = vector(t, "max", p);
+  if (!hi) fail(p + ".max", "missing required key (the box's upper corner, " + std::to_string(dim_) + " numbers [m])");
+  for (int a = 0; a < dim_; ++a)
+    if (!((*hi)[a] > (*lo)[a]))
+      fail(p + ".max",
+           "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
+           t.get("max"));
+  b.min = *lo;
+  b.max = *hi;
+
+  b.spacing = required_number(t, "spacing", p, "the lattice spacing [m], > 0");
+  require(b.spacing > 0, t, "spacing", p, b.spacing, "> 0");
+  // Guard against a typo asking for an absurd number of particles.
+  double count = 1;
+  for (int a = 0; a < dim_; ++a) count *= std::ceil((b.max[a] - b.min[a]) / b.spacing);
+  if (count > 1e10)
+    fail(p + ".spacing", "gives about " + fmt(count) + " particles (more than 1e10); is the spacing a typo?",
+         t.get("spacing"));
+
+  b.lattice = choice(t, "lattice", p, Lattice::Cubic,
+                     {{"cubic", Lattice::Cubic}, {"hcp", Lattice::HexagonalClosePacked}});
+  if (b.lattice == Lattice::HexagonalClosePacked && dim_ == 1)
+    fail(p + ".lattice", "'hcp' needs simulation.dimension 2 or 3 (in 1-D use 'cubic')", t.get("lattice"));
+
+  b.density = required_number(t, "density", p, "the initial density [kg/m^3], > 0");
+  require(b.density > 0, t, "density", p, b.density, "> 0");
+
+  // The thermal state: exactly one of pressure and internal energy.
+  const auto pressure = number(t, "pressure", p);
+  const auto energy = number(t, "internal_energy", p);
+  if (pressure && energy)
+    fail(p, "both 'pressure' and 'internal_energy' are given; give exactly one", t.get("internal_energy"));
+  if (!pressure && !energy)
+    fail(p, "neither 'pressure' [Pa] nor 'internal_energy' [J/kg] is given; give exactly one");
+  if (pressure) {
+    require(*pressure >= 0, t, "pressure", p, *pressure, ">= 0");
+    b.pressure = *pressure;
+  } else {
+    require(*energy >= 0, t, "internal_energy", p, *energy, ">= 0");
+    b.internal_energy = *energy;
+  }
+
+  if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  return b;
+}
+
+void SceneReader::read_domain(const toml::table& t, DomainConfig& d) {
+  const std::string p = "domain";
+  check_keys(t, p, {"periodic", "min", "max"});
+  bool any_periodic = false;
+  if (const toml::node* n = t.get("periodic")) {
+    const toml::array* arr = n->as_array();
+    if (!arr) fail(p + ".periodic", "expected an array of " + std::to_string(dim_) + " booleans, got " + type_name(*n), n);
+    check_length(*arr, p + ".periodic", n);
+    for (int a = 0; a < dim_; ++a) {
+      const auto* v = (*arr)[a].as_boolean();
+      if (!v)
+        fail(p + ".periodic", "entry " + std::to_string(a) + ": expected true or false, got " + type_name((*arr)[a]), n);
+      d.periodic[a] = v->get();
+      any_periodic = any_periodic || d.periodic[a];
+    }
+  }
+  const auto lo = vector(t, "min", p);
+  const auto hi = vector(t, "max", p);
+  if (any_periodic && !lo) fail(p + ".min", "missing; required when an axis is periodic (domain.periodic)");
+  if (any_periodic && !hi) fail(p + ".max", "missing; required when an axis is periodic (domain.periodic)");
+  if (lo.has_value() != hi.has_value())
+    fail(lo ? p + ".max" : p + ".min", "missing; domain.min and domain.max go together");
+  if (lo) {
+    for (int a = 0; a < dim_; ++a)
+      if (!((*hi)[a] > (*lo)[a]))
+        fail(p + ".max",
+             "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
+             t.get("max"));
+    d.min = *lo;
+    d.max = *hi;
+  }
+}
+
+void SceneReader::read_output(const toml::table& t, OutputConfig& o) {
+  const std::string p = "output";
+  check_keys(t, p, {"name", "interval", "snapshots"});
+  if (auto s = string(t, "name", p)) {
+    if (!is_identifier(*s))
+      fail(p + ".name", "is '" + *s + "'; a file stem may contain only letters, digits, '_' and '-'", t.get("name"));
+    o.name = *s;
+  }
+  if (auto x = number(t, "interval", p)) {
+    require(*x >= 0, t, "interval", p, *x, ">= 0 (0 = initial and final snapshots only)");
+    o.interval = *x;
+  }
+  if (auto b = boolean(t, "snapshots", p)) o.snapshots = *b;
+}
+
+Scene SceneReader::read(const toml::table& root) {
+  Scene scene;
+  scene.file = file_;
+  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output"});
+  read_simulation(root, scene.simulation);
+
+  // Materials, in declaration order (toml++ keeps tables sorted by key, so
+  // order by source position; ones created by --set come last).
+  const toml::table* mats = table(root, "materials", "");
+  if (!mats) fail("materials", "missing required table: define at least one [materials.NAME]");
+  std::vector<std::pair<const toml::key*, const toml::node*>> entries;
+  for (const auto& [k, n] : *mats) entries.emplace_back(&k, &n);
+  auto position = [](const toml::key* k) {
+    const auto& b = k->source().begin;
+    return b.line == 0 ? std::pair<std::uint64_t, std::uint64_t>(~0ull, 0) : std::pair<std::uint64_t, std::uint64_t>(b.line, b.column);
+  };
+  std::stable_sort(entries.begin(), entries.end(),
+                   [&](const auto& a, const auto& b) { return position(a.first) < position(b.first); });
+  if (entries.empty()) fail("materials", "at least one material is required ([materials.NAME])", root.get("materials"));
+  for (const auto& [k, n] : entries) {
+    const std::string name(k->str());
+    if (!n->is_table()) fail("materials." + name, "expected a table ([materials." + name + "]), got " + type_name(*n), n);
+    scene.materials.push_back(read_material(name, *n->as_table()));
+  }
+
+  // Bodies: an array of tables ([[bodies]]).
+  const toml::node* bodies = root.get("bodies");
+  if (!bodies) fail("bodies", "missing: at least one [[bodies]] entry is required");
+  const toml::array* arr = bodies->as_array();
+  if (!arr) fail("bodies", "expected an array of tables: write [[bodies]], not [bodies]", bodies);
+  if (arr->empty()) fail("bodies", "at least one body is required", bodies);
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const std::string p = "bodies[" + std::to_string(i) + "]";
+    const toml::table* t = (*arr)[i].as_table();
+    if (!t) fail(p, "expected a table, got " + type_name((*arr)[i]), &(*arr)[i]);
+    scene.bodies.push_back(read_body(p, *t, scene.materials));
+  }
+
+  if (const toml::table* d = table(root, "domain", "")) read_domain(*d, scene.domain);
+  if (const toml::table* o = table(root, "output", "")) read_output(*o, scene.output);
+
+  // Bodies must lie inside the domain along periodic axes.
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const BodyConfig& b = scene.bodies[i];
+    const std::string p = "bodies[" + std::to_string(i) + "]";
+    for (int a = 0; a < dim_; ++a) {
+      if (!scene.domain.periodic[a]) continue;
+      const std::string axis = std::to_string(a);
+      if (b.min[a] < scene.domain.min[a])
+        fail(p + ".min", "entry " + axis + " is " + fmt(b.min[a]) + ", below domain.min (" +
+                             fmt(scene.domain.min[a]) + ") on periodic axis " + axis + "; bodies must lie inside a periodic domain");
+      if (b.max[a] > scene.domain.max[a])
+        fail(p + ".max", "entry " + axis + " is " + fmt(b.max[a]) + ", above domain.max (" +
+                             fmt(scene.domain.max[a]) + ") on periodic axis " + axis + "; bodies must lie inside a periodic domain");
+    }
+  }
+  return scene;
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& file_label, const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, file_label);
+  } catch (const toml::parse_error& e) {
+    const auto& at = e.source().begin;
+    throw InputError(file_label, "",
+                     "malformed TOML at line " + std::to_string(at.line) + ", column " + std::to_string(at.column) +
+                         ": " + std::string(e.description()));
+  }
+
+  std::map<std::string, std::string> set_by;
+  for (const auto& o : overrides) set_by[apply_override(root, o, file_label)] = o;
+
+  Scene scene = SceneReader(file_label, set_by).read(root);
+
+  // Scene::text is the file as written (comments kept, so it re-parses to the
+  // same material order) followed by a comment block listing the overrides.
+  scene.text = text;
+  if (!overrides.empty()) {
+    if (!scene.text.empty() && scene.text.back() != '\n') scene.text += '\n';
+    scene.text += "\n# ---- rubble: --set overrides applied on top of the text above ----\n";
+    for (std::string o : overrides) {
+      std::replace(o.begin(), o.end(), '\n', ' ');
+      scene.text += "# --set " + o + "\n";
+    }
+  }
+  return scene;
+}
+
+Scene load_scene_file(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "", "no such file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file for reading");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", "error while reading the file");
+  return parse_scene(buf.str(), path, overrides);
+}
+
+}  // namespace rubble

@@ -1,0 +1,100 @@
+#pragma once
+// One JSON record per verification run (format: docs/report-format.md),
+// written by every rung and rendered by ci/report. Header-only, no
+// dependencies: a tiny JSON writer is enough for flat records.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace rubble::verification {
+
+// A JSON value built from nested maps/vectors, printed in key order.
+class Json {
+ public:
+  Json() : text_("null") {}
+  Json(double v) {  // NOLINT: implicit on purpose
+    if (!std::isfinite(v)) { text_ = "null"; return; }
+    char b[40];
+    std::snprintf(b, sizeof b, "%.10g", v);
+    text_ = b;
+  }
+  Json(int v) : text_(std::to_string(v)) {}
+  Json(long v) : text_(std::to_string(v)) {}
+  Json(long long v) : text_(std::to_string(v)) {}
+  Json(std::size_t v) : text_(std::to_string(v)) {}
+  Json(bool v) : text_(v ? "true" : "false") {}
+  Json(const char* s) : text_(quote(s)) {}
+  Json(const std::string& s) : text_(quote(s)) {}
+  Json(const std::vector<double>& a) {
+    text_ = "[";
+    for (std::size_t i = 0; i < a.size(); ++i) text_ += (i ? "," : "") + Json(a[i]).text_;
+    text_ += "]";
+  }
+  static Json object(const std::vector<std::pair<std::string, Json>>& kv) {
+    Json j;
+    j.text_ = "{";
+    for (std::size_t i = 0; i < kv.size(); ++i) j.text_ += (i ? ", " : "") + quote(kv[i].first) + ": " + kv[i].second.text_;
+    j.text_ += "}";
+    return j;
+  }
+  static Json array(const std::vector<Json>& items) {
+    Json j;
+    j.text_ = "[";
+    for (std::size_t i = 0; i < items.size(); ++i) j.text_ += (i ? ", " : "") + items[i].text_;
+    j.text_ += "]";
+    return j;
+  }
+  const std::string& str() const { return text_; }
+
+ private:
+  static std::string quote(const std::string& s) {
+    std::string o = "\"";
+    for (char c : s) {
+      if (c == '"' || c == '\\') o += '\\';
+      if (c == '\n') { o += "\\n"; continue; }
+      o += c;
+    }
+    return o + "\"";
+  }
+  std::string text_;
+};
+
+// A pass/fail check with its threshold and where the threshold comes from.
+struct Check {
+  std::string name;
+  double value;
+  double threshold;
+  std::string op;  // "<=" or ">="
+  std::string source;
+  bool passed() const { return op == "<=" ? value <= threshold : value >= threshold; }
+  Json json() const {
+    return Json::object({{"name", name}, {"value", value}, {"threshold", threshold}, {"op", op},
+                         {"source", source}, {"passed", passed()}});
+  }
+};
+
+inline void write_record(const std::filesystem::path& dir, const std::string& file_stem, const Json& record) {
+  std::filesystem::create_directories(dir);
+  std::ofstream f(dir / (file_stem + ".json"));
+  f << record.str() << "\n";
+  if (!f) throw std::runtime_error("cannot write record " + (dir / (file_stem + ".json")).string());
+}
+
+// Least-squares slope of log(error) against log(resolution), negated: the
+// observed order of convergence over a whole ladder.
+inline double observed_order(const std::vector<double>& resolution, const std::vector<double>& error) {
+  const std::size_t n = resolution.size();
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = std::log(resolution[i]), y = std::log(error[i]);
+    sx += x; sy += y; sxx += x * x; sxy += x * y;
+  }
+  return -(n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+}  // namespace rubble::verification
