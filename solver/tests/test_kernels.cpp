@@ -77,7 +77,10 @@ template <int D>
 void check_normalisation(KernelType k) {
   const double H = 1.7;  // not 1, so the H^-D scaling is exercised
   const double integral = radial_integral(
-      [&](double r) { return unit_sphere_area(D) * std::pow(r, D - 1) * double(rubble::kernel_w<D>(k, Real(r), Real(H))); },
+      [&](double r) {
+        return unit_sphere_area(D) * std::pow(r, D - 1) *
+               double(rubble::kernel_w<D>(k, Real(r), Real(H)));
+      },
       H);
   // Exact quadrature (see radial_integral): only rounding remains, ~1e-15 in
   // double; in float W itself carries ~1e-7 relative error.
@@ -101,17 +104,22 @@ TEST(Kernels, CentralValuesMatchDehnenAlyTable1) {
   const double tol = 1e-14 + 4 * kEps;
   auto rel = [&](double got, double want) { return std::fabs(got / want - 1.0); };
   EXPECT_LT(rel(rubble::kernel_w<1>(KernelType::CubicSpline, 0, H) * H, 8.0 / 3.0 * 0.5), tol);
-  EXPECT_LT(rel(rubble::kernel_w<2>(KernelType::CubicSpline, 0, H) * H * H, 80.0 / (7 * kPi) * 0.5), tol);
-  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::CubicSpline, 0, H) * H * H * H, 16.0 / kPi * 0.5), tol);
+  EXPECT_LT(rel(rubble::kernel_w<2>(KernelType::CubicSpline, 0, H) * H * H, 80.0 / (7 * kPi) * 0.5),
+            tol);
+  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::CubicSpline, 0, H) * H * H * H, 16.0 / kPi * 0.5),
+            tol);
   EXPECT_LT(rel(rubble::kernel_w<1>(KernelType::WendlandC2, 0, H) * H, 5.0 / 4.0), tol);
   EXPECT_LT(rel(rubble::kernel_w<2>(KernelType::WendlandC2, 0, H) * H * H, 7.0 / kPi), tol);
-  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC2, 0, H) * H * H * H, 21.0 / (2 * kPi)), tol);
+  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC2, 0, H) * H * H * H, 21.0 / (2 * kPi)),
+            tol);
   EXPECT_LT(rel(rubble::kernel_w<1>(KernelType::WendlandC4, 0, H) * H, 3.0 / 2.0), tol);
   EXPECT_LT(rel(rubble::kernel_w<2>(KernelType::WendlandC4, 0, H) * H * H, 9.0 / kPi), tol);
-  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC4, 0, H) * H * H * H, 495.0 / (32 * kPi)), tol);
+  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC4, 0, H) * H * H * H, 495.0 / (32 * kPi)),
+            tol);
   EXPECT_LT(rel(rubble::kernel_w<1>(KernelType::WendlandC6, 0, H) * H, 55.0 / 32.0), tol);
   EXPECT_LT(rel(rubble::kernel_w<2>(KernelType::WendlandC6, 0, H) * H * H, 78.0 / (7 * kPi)), tol);
-  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC6, 0, H) * H * H * H, 1365.0 / (64 * kPi)), tol);
+  EXPECT_LT(rel(rubble::kernel_w<3>(KernelType::WendlandC6, 0, H) * H * H * H, 1365.0 / (64 * kPi)),
+            tol);
 }
 
 // ---- 2. ∫ ∇W dV = 0 and its first moment ---------------------------------------
@@ -163,8 +171,13 @@ TEST(Kernels, GradientIntegratesToZero) {
 template <int D>
 void check_first_moment(KernelType k) {
   const double H = 0.8;
-  const double m = -unit_sphere_area(D) / D *
-                   radial_integral([&](double r) { return std::pow(r, D) * double(rubble::kernel_dwdr<D>(k, Real(r), Real(H))); }, H);
+  const double m =
+      -unit_sphere_area(D) / D *
+      radial_integral(
+          [&](double r) {
+            return std::pow(r, D) * double(rubble::kernel_dwdr<D>(k, Real(r), Real(H)));
+          },
+          H);
   EXPECT_NEAR(m, 1.0, kSingle ? 1e-5 : 1e-12) << rubble::kernel_name(k) << " D=" << D;
 }
 
@@ -237,7 +250,8 @@ TEST(Kernels, LatticeIdentityAtDefaultHfact) {
     EXPECT_LT(e1, bound) << rubble::kernel_name(k) << " D=1";
     EXPECT_LT(e2, bound) << rubble::kernel_name(k) << " D=2";
     EXPECT_LT(e3, bound) << rubble::kernel_name(k) << " D=3";
-    std::printf("  lattice |E-I| %-13s H=%.2f dx: 1D %.2e  2D %.2e  3D %.2e\n", rubble::kernel_name(k), hf, e1, e2, e3);
+    std::printf("  lattice |E-I| %-13s H=%.2f dx: 1D %.2e  2D %.2e  3D %.2e\n",
+                rubble::kernel_name(k), hf, e1, e2, e3);
   }
 }
 
@@ -266,13 +280,15 @@ void check_radial_derivatives(KernelType k) {
   for (int i = 1; i < 100; ++i) {
     const double r = (i + 0.123) / 100.0 * H * (1.0 - 2 * kFdStep);
     const double fd_r = (double(rubble::kernel_w<D>(k, Real(r + s), Real(H))) -
-                         double(rubble::kernel_w<D>(k, Real(r - s), Real(H)))) / (2 * s);
+                         double(rubble::kernel_w<D>(k, Real(r - s), Real(H)))) /
+                        (2 * s);
     const double an_r = rubble::kernel_dwdr<D>(k, Real(r), Real(H));
     EXPECT_LE(an_r, 0.0);
     EXPECT_LT(std::fabs(fd_r - an_r), kFdTol * (std::fabs(an_r) + scale))
         << rubble::kernel_name(k) << " D=" << D << " q=" << r / H;
     const double fd_h = (double(rubble::kernel_w<D>(k, Real(r), Real(H + s))) -
-                         double(rubble::kernel_w<D>(k, Real(r), Real(H - s)))) / (2 * s);
+                         double(rubble::kernel_w<D>(k, Real(r), Real(H - s)))) /
+                        (2 * s);
     const double an_h = rubble::kernel_dwdh<D>(k, Real(r), Real(H));
     EXPECT_LT(std::fabs(fd_h - an_h), kFdTol * (std::fabs(an_h) + scale))
         << rubble::kernel_name(k) << " D=" << D << " q=" << r / H;
@@ -294,7 +310,8 @@ void check_gradient(KernelType k) {
   const double H = 0.9;
   const double scale = double(rubble::kernel_w<D>(k, 0, Real(H))) / H;
   const double s = kFdStep * H;
-  const double dirs[4][3] = {{0.6, -0.48, 0.64}, {-0.2, 0.9, -0.387}, {0.95, 0.1, -0.296}, {-0.5, -0.5, 0.7071}};
+  const double dirs[4][3] = {
+      {0.6, -0.48, 0.64}, {-0.2, 0.9, -0.387}, {0.95, 0.1, -0.296}, {-0.5, -0.5, 0.7071}};
   for (const auto& dir : dirs) {
     double len = 0.0;
     for (int i = 0; i < D; ++i) len += dir[i] * dir[i];
@@ -310,7 +327,8 @@ void check_gradient(KernelType k) {
         xp[i] += Real(s);
         xm[i] -= Real(s);
         const double fd = (double(rubble::kernel_w<D>(k, rubble::norm(xp), Real(H))) -
-                           double(rubble::kernel_w<D>(k, rubble::norm(xm), Real(H)))) / (2 * s);
+                           double(rubble::kernel_w<D>(k, rubble::norm(xm), Real(H)))) /
+                          (2 * s);
         EXPECT_LT(std::fabs(fd - double(g[i])), kFdTol * (std::fabs(double(g[i])) + scale))
             << rubble::kernel_name(k) << " D=" << D << " q=" << r / H << " component " << i;
       }
@@ -336,7 +354,8 @@ void check_support(KernelType k) {
   const double H = 2.1;
   for (int i = 0; i <= 2000; ++i) {
     const double r = i / 2000.0 * H;
-    EXPECT_GE(rubble::kernel_w<D>(k, Real(r), Real(H)), Real(0)) << rubble::kernel_name(k) << " r=" << r;
+    EXPECT_GE(rubble::kernel_w<D>(k, Real(r), Real(H)), Real(0))
+        << rubble::kernel_name(k) << " r=" << r;
   }
   for (double q : {1.0, 1.0 + 1e-6, 1.5, 10.0}) {
     const Real r = Real(q * H);
@@ -373,12 +392,18 @@ void check_cubic_joint() {
   const double H = 1.0, e = kSingle ? 1e-6 : 1e-9, tol = kSingle ? 1e-4 : 1e-7;
   const double lo = 0.5 - e, hi = 0.5 + e;
   const double w0 = rubble::kernel_w<D>(k, 0, Real(H));
-  EXPECT_NEAR(double(rubble::kernel_w<D>(k, Real(lo), Real(H))), double(rubble::kernel_w<D>(k, Real(hi), Real(H))), tol * w0);
-  EXPECT_NEAR(double(rubble::kernel_dwdr<D>(k, Real(lo), Real(H))), double(rubble::kernel_dwdr<D>(k, Real(hi), Real(H))), tol * w0);
+  EXPECT_NEAR(double(rubble::kernel_w<D>(k, Real(lo), Real(H))),
+              double(rubble::kernel_w<D>(k, Real(hi), Real(H))), tol * w0);
+  EXPECT_NEAR(double(rubble::kernel_dwdr<D>(k, Real(lo), Real(H))),
+              double(rubble::kernel_dwdr<D>(k, Real(hi), Real(H))), tol * w0);
   // Second derivative from one-sided differences of dW/dr on each side.
   const double s = 1e-3;
-  const double d2_lo = (double(rubble::kernel_dwdr<D>(k, Real(lo), Real(H))) - double(rubble::kernel_dwdr<D>(k, Real(lo - s), Real(H)))) / s;
-  const double d2_hi = (double(rubble::kernel_dwdr<D>(k, Real(hi + s), Real(H))) - double(rubble::kernel_dwdr<D>(k, Real(hi), Real(H)))) / s;
+  const double d2_lo = (double(rubble::kernel_dwdr<D>(k, Real(lo), Real(H))) -
+                        double(rubble::kernel_dwdr<D>(k, Real(lo - s), Real(H)))) /
+                       s;
+  const double d2_hi = (double(rubble::kernel_dwdr<D>(k, Real(hi + s), Real(H))) -
+                        double(rubble::kernel_dwdr<D>(k, Real(hi), Real(H)))) /
+                       s;
   // One-sided differences err by s·W'''/2 ~ 1e-3 · 36 sigma: allow 0.1 sigma.
   EXPECT_NEAR(d2_lo, d2_hi, 0.1 * w0);
 }
@@ -417,7 +442,10 @@ TEST(Kernels, DefaultHfactFollowsStandardDeviationRule) {
   static_assert(rubble::kernel_default_hfact(KernelType::CubicSpline) == 2.4);
   auto sigma_over_H = [](KernelType k) {
     const double m2 = radial_integral(
-        [&](double r) { return 4 * kPi * r * r * r * r * double(rubble::kernel_w<3>(k, Real(r), Real(1))); }, 1.0);
+        [&](double r) {
+          return 4 * kPi * r * r * r * r * double(rubble::kernel_w<3>(k, Real(r), Real(1)));
+        },
+        1.0);
     return std::sqrt(m2 / 3.0);
   };
   const double s_cubic = 2.4 * sigma_over_H(KernelType::CubicSpline);

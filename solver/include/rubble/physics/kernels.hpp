@@ -75,7 +75,7 @@ RUBBLE_HD_INLINE Real sigma(KernelType k) {
     case KernelType::WendlandC4:
       return D == 1 ? Real(3) / Real(2) : D == 2 ? Real(9) / kPi : Real(495) / (Real(32) * kPi);
     case KernelType::WendlandC6:
-      return D == 1 ? Real(55) / Real(32)
+      return D == 1   ? Real(55) / Real(32)
              : D == 2 ? Real(78) / (Real(7) * kPi)
                       : Real(1365) / (Real(64) * kPi);
   }
@@ -169,10 +169,14 @@ RUBBLE_HD_INLINE Vec<D> kernel_grad(KernelType k, const Vec<D>& dx, Real H) {
 // Default H/Δx for each kernel (see "Default H / Δx" above).
 RUBBLE_HD constexpr double kernel_default_hfact(KernelType k) {
   switch (k) {
-    case KernelType::CubicSpline: return 2.4;
-    case KernelType::WendlandC2: return 2.8;
-    case KernelType::WendlandC4: return 3.2;
-    case KernelType::WendlandC6: return 3.5;
+    case KernelType::CubicSpline:
+      return 2.4;
+    case KernelType::WendlandC2:
+      return 2.8;
+    case KernelType::WendlandC4:
+      return 3.2;
+    case KernelType::WendlandC6:
+      return 3.5;
   }
   return 2.4;
 }
@@ -180,10 +184,14 @@ RUBBLE_HD constexpr double kernel_default_hfact(KernelType k) {
 // ---- host-only helpers --------------------------------------------------------
 inline const char* kernel_name(KernelType k) {
   switch (k) {
-    case KernelType::CubicSpline: return "cubic_spline";
-    case KernelType::WendlandC2: return "wendland_c2";
-    case KernelType::WendlandC4: return "wendland_c4";
-    case KernelType::WendlandC6: return "wendland_c6";
+    case KernelType::CubicSpline:
+      return "cubic_spline";
+    case KernelType::WendlandC2:
+      return "wendland_c2";
+    case KernelType::WendlandC4:
+      return "wendland_c4";
+    case KernelType::WendlandC6:
+      return "wendland_c6";
   }
   return "unknown";
 }

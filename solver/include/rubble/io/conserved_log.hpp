@@ -1,0 +1,56 @@
+#pragma once
+// conserved.csv: one line of conserved quantities per logged step
+// (DESIGN.md, "conserved.csv"). Columns, by dimension:
+//   time,step,dt,mass,
+//   momentum_x[,momentum_y[,momentum_z]]                (Dim columns)
+//   [angular_momentum_z]                                (2-D: L_z only)
+//   [angular_momentum_x,angular_momentum_y,angular_momentum_z]  (3-D)
+//   kinetic,internal,gravitational,total
+// 1-D has no angular momentum. Values are written with full double
+// precision (%.17g) and each line is flushed, so the file is complete up to
+// the last step even if the run dies.
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "rubble/particles/particle_store.hpp"
+
+namespace rubble {
+
+struct ConservedRecord {
+  double time = 0;
+  std::int64_t step = 0;
+  double dt = 0;
+  double mass = 0;
+  double momentum[3] = {0, 0, 0};          // components beyond Dim are 0
+  double angular_momentum[3] = {0, 0, 0};  // L = sum m x cross v; 2-D: only [2]
+  double kinetic = 0;                      // sum 1/2 m |v|^2
+  double internal = 0;                     // sum m u
+  double gravitational = 0;
+  double total = 0;                        // kinetic + internal + gravitational
+};
+
+class ConservedLog {
+ public:
+  // Creates (truncates) `path` and writes the header. Throws
+  // std::runtime_error naming the file if it cannot.
+  ConservedLog(const std::string& path, int dimension);
+  void append(const ConservedRecord& r);
+
+  // The header line for `dimension`, without the newline.
+  static std::string header(int dimension);
+
+ private:
+  std::string path_;
+  int dim_;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_;
+};
+
+// Mass, momentum, angular momentum (about the origin), kinetic and internal
+// energy of the particles; gravitational energy is 0 until gravity lands.
+// Sums run in double whatever Real is.
+template <int D>
+ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt);
+
+}  // namespace rubble

@@ -1,0 +1,281 @@
+// Neighbour search over the Morton order; see cell_list.hpp for the method.
+#include "rubble/neighbors/cell_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "rubble/neighbors/morton.hpp"
+#include "rubble/neighbors/spatial_order.hpp"
+
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
+namespace rubble {
+
+namespace {
+
+#if defined(_OPENMP)
+int max_threads() { return omp_get_max_threads(); }
+int thread_id() { return omp_get_thread_num(); }
+#else
+int max_threads() { return 1; }
+int thread_id() { return 0; }
+#endif
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("CellList::build: " + what); }
+
+std::string str(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+// Octant (quadrant, half) of a key at a level of the octree: its D bits
+// just below the `level` groups already fixed by the parents.
+template <int D>
+std::uint32_t digit(std::uint64_t key, int level) {
+  return std::uint32_t(key >> (D * (morton_bits<D> - 1 - level))) & ((1u << D) - 1u);
+}
+
+}  // namespace
+
+template <int D>
+void CellList<D>::build(const Vec<D>* x, const Real* H, std::size_t n, const Box<D>& box) {
+  if (n >= std::numeric_limits<std::uint32_t>::max()) fail("more than 2^32 - 2 particles");
+  box_ = box;
+  for (int k = 0; k < D; ++k)
+    if (box.periodic[k] && !(box.hi[k] > box.lo[k]))
+      fail("periodic axis " + std::to_string(k) + " has hi <= lo");
+
+  // Check the input: finite positions, finite H >= 0. Report the first bad
+  // particle so the message is the same on any number of threads.
+  std::size_t bad_x = n, bad_h = n;
+  Real h_max = 0;
+#pragma omp parallel for reduction(min : bad_x, bad_h) reduction(max : h_max)
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < D; ++k)
+      if (!std::isfinite(x[i][k])) bad_x = std::min(bad_x, i);
+    if (!(H[i] >= Real(0)) || !std::isfinite(H[i])) bad_h = std::min(bad_h, i);
+    else h_max = std::max(h_max, H[i]);
+  }
+  if (bad_x < n) fail("particle " + std::to_string(bad_x) + " has a non-finite position");
+  if (bad_h < n)
+    fail("particle " + std::to_string(bad_h) + " has support radius H = " + str(H[bad_h]) +
+         "; it must be finite and >= 0");
+  // With H <= L/2 the minimum image is the only image within reach, so each
+  // pair is found once and none is missed, however few H fit in L.
+  for (int k = 0; k < D; ++k)
+    if (box.periodic[k] && h_max > Real(0.5) * box.length(k))
+      fail("support radius H = " + str(h_max) + " exceeds half the periodic length along axis " +
+           std::to_string(k) + " (L/2 = " + str(Real(0.5) * box.length(k)) +
+           "); a particle would neighbour several images of another. Enlarge the periodic box "
+           "or reduce the smoothing lengths.");
+
+  // Sort by Morton key within the particles' bounding box.
+  const Box<D> bb = bounding_box(x, n, box);
+  std::vector<std::uint64_t> keys(n);
+#pragma omp parallel for
+  for (std::size_t i = 0; i < n; ++i) keys[i] = morton_key<D>(x[i], bb);
+  order_ = sort_permutation(keys);
+
+  // Copy the particles in sorted order; positions on periodic axes are
+  // mapped into [lo, hi) (a no-op for positions already there).
+  keys_.resize(n);
+  x_.resize(n);
+  h_.resize(n);
+#pragma omp parallel for
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t i = order_[s];
+    keys_[s] = keys[i];
+    h_[s] = H[i];
+    Vec<D> p = x[i];
+    for (int k = 0; k < D; ++k) {
+      if (!box.periodic[k] || (p[k] >= box.lo[k] && p[k] < box.hi[k])) continue;
+      const Real L = box.length(k);
+      p[k] -= L * std::floor((p[k] - box.lo[k]) / L);
+      if (!(p[k] >= box.lo[k] && p[k] < box.hi[k])) p[k] = box.lo[k];  // rounding at hi
+    }
+    x_[s] = p;
+  }
+
+  // Rounding allowance of the pruning test (see gap()): a few units in the
+  // last place of the coordinates, so that a cell is never skipped when
+  // rounding would make a pair inside it pass the exact test.
+  for (int k = 0; k < D; ++k)
+    slack_[k] = Real(16) * std::numeric_limits<Real>::epsilon() * (std::abs(bb.lo[k]) + std::abs(bb.hi[k]));
+
+  nodes_.clear();
+  cells_.clear();
+  if (n > 0) build_node(0, std::uint32_t(n), 0);
+}
+
+// Emit the node for sorted range [begin, end), whose keys agree on their
+// first `level` octant digits, and (recursively) its subtree. Returns its index.
+template <int D>
+std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, int level) {
+  constexpr int kLevels = morton_bits<D>;
+  const bool small = end - begin <= max_cell_size_;
+  // Levels where all particles share one octant add nothing: skip them.
+  while (!small && level < kLevels && digit<D>(keys_[begin], level) == digit<D>(keys_[end - 1], level))
+    ++level;
+
+  const std::uint32_t id = std::uint32_t(nodes_.size());
+  nodes_.push_back(Node{x_[begin], x_[begin], h_[begin], begin, end, 0, false});
+
+  if (small || level == kLevels) {  // a cell: bounds from its particles
+    Node& c = nodes_[id];
+    c.is_cell = true;
+    for (std::uint32_t s = begin; s < end; ++s) {
+      for (int k = 0; k < D; ++k) {
+        c.lo[k] = std::min(c.lo[k], x_[s][k]);
+        c.hi[k] = std::max(c.hi[k], x_[s][k]);
+      }
+      c.h_max = std::max(c.h_max, h_[s]);
+    }
+    c.skip = id + 1;
+    cells_.push_back(id);
+    return id;
+  }
+
+  // Split into the (non-empty) octants of the next digit; within this range
+  // the keys are sorted by that digit.
+  std::uint32_t first = begin;
+  while (first < end) {
+    const std::uint32_t d = digit<D>(keys_[first], level);
+    const std::uint32_t last = std::uint32_t(
+        std::partition_point(keys_.begin() + first, keys_.begin() + end,
+                             [&](std::uint64_t key) { return digit<D>(key, level) == d; }) -
+        keys_.begin());
+    const std::uint32_t child = build_node(first, last, level + 1);
+    const Node c = nodes_[child];  // copy: build_node may have reallocated
+    Node& p = nodes_[id];
+    for (int k = 0; k < D; ++k) {
+      p.lo[k] = std::min(p.lo[k], c.lo[k]);
+      p.hi[k] = std::max(p.hi[k], c.hi[k]);
+    }
+    p.h_max = std::max(p.h_max, c.h_max);
+    first = last;
+  }
+  nodes_[id].skip = std::uint32_t(nodes_.size());
+  return id;
+}
+
+// Lower bound on the distance along axis k between a point of [alo, ahi]
+// and a point of [blo, bhi] (minimum image on periodic axes, where both
+// intervals lie in [lo, hi)). Reduced by slack_ so that the rounding of this
+// and of Box::separation can never make it exceed a computed pair distance.
+template <int D>
+Real CellList<D>::gap(int k, Real alo, Real ahi, Real blo, Real bhi) const {
+  Real g;
+  if (blo > ahi) {
+    g = blo - ahi;
+    if (box_.periodic[k]) g = std::min(g, alo + box_.length(k) - bhi);
+  } else if (alo > bhi) {
+    g = alo - bhi;
+    if (box_.periodic[k]) g = std::min(g, blo + box_.length(k) - ahi);
+  } else {
+    return Real(0);
+  }
+  return std::max(g - slack_[k], Real(0));
+}
+
+template <int D>
+void CellList<D>::find_neighbors(NeighborLists& out) const {
+  const std::size_t n = x_.size();
+  out.offset.assign(n + 1, 0);
+  out.index.clear();
+  if (n == 0) return;
+
+  // Squared distance between two boxes (a point is a box with lo == hi).
+  auto distance2 = [this](const Vec<D>& alo, const Vec<D>& ahi, const Vec<D>& blo, const Vec<D>& bhi) {
+    Real s = 0;
+    for (int k = 0; k < D; ++k) {
+      const Real g = gap(k, alo[k], ahi[k], blo[k], bhi[k]);
+      s += g * g;
+    }
+    return s;
+  };
+
+  // Pass 1: each thread appends the lists of the particles of its cells to
+  // its own buffer and notes where each list is.
+  const int threads = max_threads();
+  std::vector<std::vector<std::uint32_t>> buffers(threads);
+  std::vector<std::size_t> start(n);
+  std::vector<std::uint32_t> count(n);
+  std::vector<int> owner(n);
+
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = thread_id();
+    std::vector<std::uint32_t>& buf = buffers[t];
+    std::vector<std::uint32_t> near;  // cells within reach of the current cell
+
+#pragma omp for schedule(dynamic, 4)
+    for (std::size_t ci = 0; ci < cells_.size(); ++ci) {
+      const Node& g = nodes_[cells_[ci]];
+
+      // Walk the hierarchy (depth first, skipping subtrees out of reach).
+      near.clear();
+      for (std::size_t i = 0; i < nodes_.size();) {
+        const Node& m = nodes_[i];
+        const Real r = std::max(g.h_max, m.h_max);
+        if (distance2(g.lo, g.hi, m.lo, m.hi) < r * r) {
+          if (m.is_cell) near.push_back(std::uint32_t(i));
+          ++i;
+        } else {
+          i = m.skip;
+        }
+      }
+
+      for (std::uint32_t a = g.begin; a < g.end; ++a) {
+        const Vec<D>& xa = x_[a];
+        const Real ha = h_[a];
+        const std::size_t first = buf.size();
+        for (const std::uint32_t j : near) {
+          const Node& m = nodes_[j];
+          const Real rm = std::max(ha, m.h_max);
+          if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
+          for (std::uint32_t b = m.begin; b < m.end; ++b) {
+            const Real r = std::max(ha, h_[b]);
+            if (norm2(box_.separation(xa, x_[b])) < r * r && b != a) buf.push_back(order_[b]);
+          }
+        }
+        // Ascending input index (already so when the input was in spatial order).
+        if (!std::is_sorted(buf.begin() + first, buf.end())) std::sort(buf.begin() + first, buf.end());
+        start[a] = first;
+        count[a] = std::uint32_t(buf.size() - first);
+        owner[a] = t;
+      }
+    }
+  }
+
+  // Offsets in input order.
+  std::uint64_t total = 0;
+  for (std::size_t s = 0; s < n; ++s) out.offset[order_[s] + 1] = count[s];
+  for (std::size_t i = 0; i < n; ++i) {
+    total += out.offset[i + 1];
+    if (total > std::numeric_limits<std::uint32_t>::max())
+      throw std::length_error("CellList::find_neighbors: more than 2^32 - 1 neighbour entries");
+    out.offset[i + 1] = std::uint32_t(total);
+  }
+
+  // Pass 2: copy the lists into place.
+  out.index.resize(total);
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::uint32_t* src = buffers[owner[s]].data() + start[s];
+    std::copy(src, src + count[s], out.index.begin() + out.offset[order_[s]]);
+  }
+}
+
+template class CellList<1>;
+template class CellList<2>;
+template class CellList<3>;
+
+}  // namespace rubble
