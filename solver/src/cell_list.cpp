@@ -43,6 +43,18 @@ std::uint32_t digit(std::uint64_t key, int level) {
   return std::uint32_t(key >> (D * (morton_bits<D> - 1 - level))) & ((1u << D) - 1u);
 }
 
+// Lower bound on the distance between a point of [alo, ahi] and a point of
+// [blo, bhi] along one axis. On a periodic axis (wrap = L; both intervals in
+// [lo, hi)) the gap the other way round counts too; on an open axis
+// wrap = +infinity removes it. Branch-free: of the two one-sided gaps at most
+// one is positive. The result is reduced by `slack` so that rounding, here
+// and in Box::separation, can never make it exceed a computed pair distance.
+inline Real axis_gap(Real alo, Real ahi, Real blo, Real bhi, Real wrap, Real slack) {
+  const Real right = std::min(blo - ahi, alo + wrap - bhi);  // b to the right of a
+  const Real left = std::min(alo - bhi, blo + wrap - ahi);   // b to the left of a
+  return std::max(std::max(right, left) - slack, Real(0));
+}
+
 }  // namespace
 
 template <int D>
@@ -104,21 +116,26 @@ void CellList<D>::build(const Vec<D>* x, const Real* H, std::size_t n, const Box
     x_[s] = p;
   }
 
-  // Rounding allowance of the pruning test (see gap()): a few units in the
+  // Rounding allowance of the pruning test (see axis_gap()): a few units in the
   // last place of the coordinates, so that a cell is never skipped when
   // rounding would make a pair inside it pass the exact test.
-  for (int k = 0; k < D; ++k)
+  for (int k = 0; k < D; ++k) {
     slack_[k] = Real(16) * std::numeric_limits<Real>::epsilon() * (std::abs(bb.lo[k]) + std::abs(bb.hi[k]));
+    wrap_[k] = box.periodic[k] ? box.length(k) : std::numeric_limits<Real>::infinity();
+  }
 
   nodes_.clear();
   cells_.clear();
-  if (n > 0) build_node(0, std::uint32_t(n), 0);
+  groups_.clear();
+  if (n > 0) build_node(0, std::uint32_t(n), 0, false);
 }
 
 // Emit the node for sorted range [begin, end), whose keys agree on their
-// first `level` octant digits, and (recursively) its subtree. Returns its index.
+// first `level` octant digits, and (recursively) its subtree. Returns its
+// index. The first node down a branch with at most max_group_size particles
+// (or a cell, whatever its size) becomes a group root.
 template <int D>
-std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, int level) {
+std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, int level, bool in_group) {
   constexpr int kLevels = morton_bits<D>;
   const bool small = end - begin <= max_cell_size_;
   // Levels where all particles share one octant add nothing: skip them.
@@ -127,8 +144,13 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
 
   const std::uint32_t id = std::uint32_t(nodes_.size());
   nodes_.push_back(Node{x_[begin], x_[begin], h_[begin], begin, end, 0, false});
+  const bool is_cell = small || level == kLevels;
+  if (!in_group && (is_cell || end - begin <= max_group_size_)) {
+    groups_.push_back(id);
+    in_group = true;
+  }
 
-  if (small || level == kLevels) {  // a cell: bounds from its particles
+  if (is_cell) {  // bounds from its particles
     Node& c = nodes_[id];
     c.is_cell = true;
     for (std::uint32_t s = begin; s < end; ++s) {
@@ -152,7 +174,7 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
         std::partition_point(keys_.begin() + first, keys_.begin() + end,
                              [&](std::uint64_t key) { return digit<D>(key, level) == d; }) -
         keys_.begin());
-    const std::uint32_t child = build_node(first, last, level + 1);
+    const std::uint32_t child = build_node(first, last, level + 1, in_group);
     const Node c = nodes_[child];  // copy: build_node may have reallocated
     Node& p = nodes_[id];
     for (int k = 0; k < D; ++k) {
@@ -166,25 +188,6 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
   return id;
 }
 
-// Lower bound on the distance along axis k between a point of [alo, ahi]
-// and a point of [blo, bhi] (minimum image on periodic axes, where both
-// intervals lie in [lo, hi)). Reduced by slack_ so that the rounding of this
-// and of Box::separation can never make it exceed a computed pair distance.
-template <int D>
-Real CellList<D>::gap(int k, Real alo, Real ahi, Real blo, Real bhi) const {
-  Real g;
-  if (blo > ahi) {
-    g = blo - ahi;
-    if (box_.periodic[k]) g = std::min(g, alo + box_.length(k) - bhi);
-  } else if (alo > bhi) {
-    g = alo - bhi;
-    if (box_.periodic[k]) g = std::min(g, blo + box_.length(k) - ahi);
-  } else {
-    return Real(0);
-  }
-  return std::max(g - slack_[k], Real(0));
-}
-
 template <int D>
 void CellList<D>::find_neighbors(NeighborLists& out) const {
   const std::size_t n = x_.size();
@@ -193,16 +196,24 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   if (n == 0) return;
 
   // Squared distance between two boxes (a point is a box with lo == hi).
-  auto distance2 = [this](const Vec<D>& alo, const Vec<D>& ahi, const Vec<D>& blo, const Vec<D>& bhi) {
+  const Box<D> box = box_;
+  Real wrap[D], slack[D];
+  for (int k = 0; k < D; ++k) wrap[k] = wrap_[k], slack[k] = slack_[k];
+  auto distance2 = [&](const Vec<D>& alo, const Vec<D>& ahi, const Vec<D>& blo, const Vec<D>& bhi) {
     Real s = 0;
     for (int k = 0; k < D; ++k) {
-      const Real g = gap(k, alo[k], ahi[k], blo[k], bhi[k]);
+      const Real g = axis_gap(alo[k], ahi[k], blo[k], bhi[k], wrap[k], slack[k]);
       s += g * g;
     }
     return s;
   };
+  const Node* nodes = nodes_.data();
+  const std::size_t node_count = nodes_.size();
+  const Vec<D>* xs = x_.data();
+  const Real* hs = h_.data();
+  const std::uint32_t* order = order_.data();
 
-  // Pass 1: each thread appends the lists of the particles of its cells to
+  // Pass 1: each thread appends the lists of the particles of its groups to
   // its own buffer and notes where each list is.
   const int threads = max_threads();
   std::vector<std::vector<std::uint32_t>> buffers(threads);
@@ -214,16 +225,16 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   {
     const int t = thread_id();
     std::vector<std::uint32_t>& buf = buffers[t];
-    std::vector<std::uint32_t> near;  // cells within reach of the current cell
+    std::vector<std::uint32_t> near;  // cells within reach of the current group
 
-#pragma omp for schedule(dynamic, 4)
-    for (std::size_t ci = 0; ci < cells_.size(); ++ci) {
-      const Node& g = nodes_[cells_[ci]];
+#pragma omp for schedule(dynamic, 2)
+    for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+      const Node& g = nodes[groups_[gi]];
 
-      // Walk the hierarchy (depth first, skipping subtrees out of reach).
+      // Walk the octree depth first, skipping subtrees out of reach.
       near.clear();
-      for (std::size_t i = 0; i < nodes_.size();) {
-        const Node& m = nodes_[i];
+      for (std::size_t i = 0; i < node_count;) {
+        const Node& m = nodes[i];
         const Real r = std::max(g.h_max, m.h_max);
         if (distance2(g.lo, g.hi, m.lo, m.hi) < r * r) {
           if (m.is_cell) near.push_back(std::uint32_t(i));
@@ -234,16 +245,16 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
       }
 
       for (std::uint32_t a = g.begin; a < g.end; ++a) {
-        const Vec<D>& xa = x_[a];
-        const Real ha = h_[a];
+        const Vec<D> xa = xs[a];
+        const Real ha = hs[a];
         const std::size_t first = buf.size();
         for (const std::uint32_t j : near) {
-          const Node& m = nodes_[j];
+          const Node& m = nodes[j];
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
           for (std::uint32_t b = m.begin; b < m.end; ++b) {
-            const Real r = std::max(ha, h_[b]);
-            if (norm2(box_.separation(xa, x_[b])) < r * r && b != a) buf.push_back(order_[b]);
+            const Real r = std::max(ha, hs[b]);
+            if (norm2(box.separation(xa, xs[b])) < r * r && b != a) buf.push_back(order[b]);
           }
         }
         // Ascending input index (already so when the input was in spatial order).

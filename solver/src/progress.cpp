@@ -7,20 +7,22 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace rubble {
 namespace {
 
 constexpr double kRedrawInterval = 0.1;  // s between bar redraws
 constexpr double kPlainInterval = 30.0;  // s between plain lines at the latest
-constexpr int kBarWidth = 20;
+constexpr int kBarWidth = 8;
 
-// "H:MM:SS", or "--:--:--" when unknown.
+// Wall time as "M:SS" below an hour, else "H:MM:SS"; "--:--" when unknown.
 std::string clock_text(double s) {
-  if (!std::isfinite(s) || s < 0) return "--:--:--";
+  if (!std::isfinite(s) || s < 0) return "--:--";
   const long long total = static_cast<long long>(s + 0.5);
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", total / 3600, (total / 60) % 60, total % 60);
+  if (total < 3600) std::snprintf(buf, sizeof buf, "%lld:%02lld", total / 60, total % 60);
+  else std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", total / 3600, (total / 60) % 60, total % 60);
   return buf;
 }
 
@@ -106,16 +108,41 @@ void Progress::finish() {
 void Progress::draw_bar(Clock::time_point now) {
   const double frac = t_end_ > 0 ? std::clamp(t_ / t_end_, 0.0, 1.0) : 0;
   const int filled = static_cast<int>(frac * kBarWidth + 0.5);
-  char line[256];
-  std::snprintf(line, sizeof line, "[%s%s] %5.1f%%  t %.3e/%.3g s  dt %.2e s  step %lld  %s  ETA %s",
-                std::string(filled, '#').c_str(), std::string(kBarWidth - filled, '.').c_str(), 100 * frac, t_,
-                t_end_, dt_, static_cast<long long>(step_), clock_text(elapsed_s(now)).c_str(),
-                clock_text(eta_s(now)).c_str());
-  // Never wrap: a wrapped line cannot be redrawn in place.
-  std::string text(line);
+  char buf[5][64];
+  std::snprintf(buf[0], sizeof buf[0], "%.1f%%", 100 * frac);
+  std::snprintf(buf[1], sizeof buf[1], "t %.3e/%.3g s", t_, t_end_);
+  std::snprintf(buf[2], sizeof buf[2], "dt %.2e s", dt_);
+  std::snprintf(buf[3], sizeof buf[3], "step %lld", static_cast<long long>(step_));
+  std::snprintf(buf[4], sizeof buf[4], "ETA %s", clock_text(eta_s(now)).c_str());
+  // Parts in display order; on a narrow terminal the highest `drop` goes
+  // first, because a wrapped line cannot be redrawn in place.
+  struct Part {
+    std::string text;
+    int drop;
+  };
+  std::vector<Part> parts = {{"[" + std::string(filled, '#') + std::string(kBarWidth - filled, '.') + "]", 2},
+                             {buf[0], 0},
+                             {buf[1], 0},
+                             {buf[2], 3},
+                             {buf[3], 1},
+                             {clock_text(elapsed_s(now)), 4},
+                             {buf[4], 0}};
   const std::size_t width = static_cast<std::size_t>(std::max(terminal_columns(out_) - 1, 10));
-  if (text.size() > width) text.resize(width);
-  std::fprintf(out_, "\r%s\x1b[K", text.c_str());
+  auto join = [&] {
+    std::string line;
+    for (const auto& p : parts) line += (line.empty() ? "" : " ") + p.text;
+    return line;
+  };
+  std::string line = join();
+  while (line.size() > width) {
+    auto worst = std::max_element(parts.begin(), parts.end(),
+                                  [](const Part& a, const Part& b) { return a.drop < b.drop; });
+    if (worst->drop == 0) break;
+    parts.erase(worst);
+    line = join();
+  }
+  if (line.size() > width) line.resize(width);
+  std::fprintf(out_, "\r%s\x1b[K", line.c_str());
   std::fflush(out_);
   bar_drawn_ = true;
 }

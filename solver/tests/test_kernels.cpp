@@ -197,7 +197,7 @@ TEST(Kernels, GradientFirstMomentIsIdentity) {
 // ∇_a W_ab ≈ -I, or with ∇_b W_ab = -∇_a W_ab; this is the "-I" of
 // PHYSICS.md §2.) Unlike the continuum integral the lattice sum is not exact:
 // it oscillates with hfact and only shrinks as the neighbour number grows.
-// Measured |E - I|_max at the default hfact (see lattice_error_table below):
+// Measured |E - I|_max at the default hfact (the test prints them):
 //     cubic 2.4 Δx:  2.2e-2 (1-D), 9.2e-3 (2-D), 1.8e-2 (3-D)
 //     C2    2.8 Δx:  1.1e-2,       9.5e-3,       8.6e-3
 //     C4    3.2 Δx:  3.1e-5,       4.7e-3,       3.4e-3

@@ -20,7 +20,7 @@ class Json {
   Json(double v) {  // NOLINT: implicit on purpose
     if (!std::isfinite(v)) { text_ = "null"; return; }
     char b[40];
-    std::snprintf(b, sizeof b, "%.10g", v);
+    std::snprintf(b, sizeof b, "%.17g", v);
     text_ = b;
   }
   Json(int v) : text_(std::to_string(v)) {}

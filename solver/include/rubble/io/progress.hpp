@@ -2,7 +2,10 @@
 // Progress report of a run on stderr (DESIGN.md, "Command line").
 //
 // On a terminal: one line redrawn in place, at most ~10 times a second:
-//   [#######.............]  35.2%  t 3.52e-04/1e-03 s  dt 1.20e-07 s  step 2931  0:00:12  ETA 0:00:22
+//   [###.....] 35.2% t 3.520e-04/0.001 s dt 1.20e-07 s step 2931 0:12 ETA 0:22
+// (simulated time / end time, step size, step count, wall time elapsed,
+// ETA); on a narrow terminal the elapsed time, dt, bar and step count are
+// left out in that order rather than letting the line wrap.
 // Not on a terminal (a log file, CI): a plain line every 10 % of simulated
 // time, or every 30 s of wall time when steps are slow. The ETA is the
 // remaining simulated time over the simulated-time rate seen so far.

@@ -9,15 +9,16 @@
 // How: build() sorts the particles by Morton key and cuts the sorted order
 // into cells, each a contiguous range of at most max_cell_size particles
 // (more only for particles sharing one finest-level key). The cells are the
-// leaves of the adaptive octree the keys define: a cell is split only while
+// leaves of the adaptive octree the keys define: a node is split only while
 // it holds too many particles, so empty space costs nothing and dense
 // clusters get small cells (memory O(n) however clustered the set is). Every
-// cell and every coarser octree node stores the tight bounds of its
-// particles and their largest H. find_neighbors() takes each cell in turn,
-// collects the cells within reach (distance < max(H_max of both)) by walking
-// that hierarchy, and tests the pairs. With a single fixed cell size a
-// particle with a 10x larger H would scan 1000x more cells; here the walk
-// skips whole empty or far regions at once.
+// node stores the tight bounds of its particles and their largest H.
+// find_neighbors() takes the particles a group at a time (a subtree of at
+// most max_group_size particles), collects the cells within reach of the
+// group (distance < max of the two H_max) by walking the octree from the
+// root, then tests each particle against the cells within its own reach.
+// With one fixed cell size, a particle with a 10x larger H would scan 1000x
+// more cells; here the walk skips whole empty or far regions at once.
 //
 // Periodic axes use the minimum image, for the bounds as for the pairs, so a
 // pair is seen exactly once whatever the box size; this is exact as long as
@@ -46,7 +47,8 @@ struct NeighborLists {
 template <int D>
 class CellList {
  public:
-  explicit CellList(std::uint32_t max_cell_size = 16) : max_cell_size_(max_cell_size ? max_cell_size : 1) {}
+  explicit CellList(std::uint32_t max_cell_size = 8, std::uint32_t max_group_size = 64)
+      : max_cell_size_(max_cell_size ? max_cell_size : 1), max_group_size_(max_group_size) {}
 
   // Build over n particles with support radii H (ideally already in spatial
   // order: then the internal sort is a single check). Particle indices in
@@ -76,11 +78,11 @@ class CellList {
     bool is_cell;   // leaf
   };
 
-  std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, int level);
-  Real gap(int k, Real alo, Real ahi, Real blo, Real bhi) const;
+  std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, int level, bool in_group);
 
-  std::uint32_t max_cell_size_;
+  std::uint32_t max_cell_size_, max_group_size_;
   Box<D> box_;                          // the domain (periodicity, lengths)
+  Real wrap_[D] = {};                   // L on periodic axes, +infinity on open ones
   Real slack_[D] = {};                  // rounding allowance of the pruning test
   std::vector<std::uint32_t> order_;    // sorted position -> input index
   std::vector<std::uint64_t> keys_;     // Morton keys in sorted order
@@ -88,6 +90,7 @@ class CellList {
   std::vector<Real> h_;                 // H in sorted order
   std::vector<Node> nodes_;             // the hierarchy, depth first
   std::vector<std::uint32_t> cells_;    // indices of the leaf nodes
+  std::vector<std::uint32_t> groups_;   // indices of the group roots
 };
 
 extern template class CellList<1>;

@@ -1,0 +1,191 @@
+// The `rubble` program end to end: bad input exits non-zero with a message
+// naming the file and the key, before any output directory is touched; an
+// existing non-empty output directory is never overwritten.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kValid = R"(
+[simulation]
+dimension = 1
+end_time = 0.001
+
+[materials.gas]
+eos = "ideal_gas"
+gamma = 1.4
+
+[[bodies]]
+shape = "box"
+material = "gas"
+min = [0.0]
+max = [1.0]
+spacing = 0.05
+density = 1.0
+pressure = 1.0
+
+[output]
+interval = 0
+)";
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << "test bug: '" << from << "' not in the scene";
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+// A scratch directory per test; commands run inside it, so the default
+// output directory (out/<stem>) lands there too.
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("rubble_test_cli_" + std::to_string(getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);  // keep the evidence when a test fails
+  }
+
+  fs::path write_scene(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+
+  // Run `rubble ARGS` in the scratch directory, capturing exit code and output.
+  Result rubble(const std::string& args) {
+    const std::string cmd = "cd '" + dir_.string() + "' && '" + std::string(RUBBLE_BINARY) + "' " + args +
+                            " >'" + (dir_ / "stdout.txt").string() + "' 2>'" + (dir_ / "stderr.txt").string() + "'";
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir_ / "stdout.txt");
+    r.err = slurp(dir_ / "stderr.txt");
+    fs::remove(dir_ / "stdout.txt");
+    fs::remove(dir_ / "stderr.txt");
+    return r;
+  }
+
+  // A bad scene: non-zero exit, stderr names file and key, no output directory made.
+  void expect_rejected(const std::string& scene_text, const std::string& key, const std::string& fragment = "") {
+    write_scene("bad.toml", scene_text);
+    const Result r = rubble("run bad.toml");
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("rubble: error: bad.toml"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(key), std::string::npos) << "stderr lacks '" << key << "': " << r.err;
+    EXPECT_NE(r.err.find(fragment), std::string::npos) << "stderr lacks '" << fragment << "': " << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "output directory created for a bad scene";
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, HelpAndInfoExitZero) {
+  Result r = rubble("--help");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("run"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("info"), std::string::npos) << r.out;
+
+  r = rubble("run --help");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("--out"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--set"), std::string::npos) << r.out;
+
+  r = rubble("info");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("precision"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cpu"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, UsageErrorsExitTwo) {
+  EXPECT_EQ(rubble("").code, 2);
+  EXPECT_EQ(rubble("run").code, 2);
+  EXPECT_EQ(rubble("frobnicate").code, 2);
+}
+
+TEST_F(Cli, MalformedToml) {
+  expect_rejected(replace(kValid, "end_time = 0.001", "end_time = = 0.001"), "line 4", "malformed TOML");
+}
+
+TEST_F(Cli, UnknownKey) { expect_rejected(replace(kValid, "spacing", "spcing"), "bodies[0].spcing", "unknown key"); }
+
+TEST_F(Cli, MissingEosParameter) {
+  expect_rejected(replace(kValid, "gamma = 1.4", ""), "materials.gas.gamma", "missing");
+}
+
+TEST_F(Cli, NegativeDensity) {
+  expect_rejected(replace(kValid, "density = 1.0", "density = -1.0"), "bodies[0].density", "> 0");
+}
+
+TEST_F(Cli, NaNPosition) { expect_rejected(replace(kValid, "max = [1.0]", "max = [nan]"), "bodies[0].max", "NaN"); }
+
+TEST_F(Cli, UnknownKeyFromSet) {
+  write_scene("ok.toml", kValid);
+  const Result r = rubble("run ok.toml --set simulation.end_tme=1");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("simulation.end_tme"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(Cli, MissingSceneFile) {
+  const Result r = rubble("run nothere.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nothere.toml"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, CudaBackendRefused) {
+  write_scene("ok.toml", kValid);
+  const Result r = rubble("run ok.toml --backend cuda");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no CUDA backend"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, RefusesNonEmptyOutputDirectory) {
+  write_scene("ok.toml", kValid);
+  // An explicit --out and the default out/<stem> are both protected.
+  for (const fs::path& out : {dir_ / "results", dir_ / "out" / "ok"}) {
+    fs::create_directories(out);
+    std::ofstream(out / "keep.txt") << "precious";
+    const Result r = rubble(out == dir_ / "results" ? "run ok.toml --out results" : "run ok.toml");
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("not empty"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(out / "keep.txt"), "precious");
+    EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 1);
+  }
+}
+
+TEST_F(Cli, RunsTinySceneIntoNewDirectory) {
+  write_scene("tiny.toml", kValid);
+  const Result r = rubble("run tiny.toml --quiet --out fresh/run1");
+  EXPECT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::is_directory(dir_ / "fresh" / "run1"));
+  EXPECT_FALSE(fs::is_empty(dir_ / "fresh" / "run1"));
+}
+
+}  // namespace
