@@ -38,9 +38,16 @@ std::string str(double v) {
 
 // Octant (quadrant, half) of a key at a level of the octree: its D bits
 // just below the `level` groups already fixed by the parents.
+#ifndef SPLIT_BITS
+#define SPLIT_BITS 1
+#endif
+template <int D>
+constexpr int kSplit = SPLIT_BITS == 1 ? 1 : D;
+template <int D>
+constexpr int kLevelsOf = D * morton_bits<D> / kSplit<D>;
 template <int D>
 std::uint32_t digit(std::uint64_t key, int level) {
-  return std::uint32_t(key >> (D * (morton_bits<D> - 1 - level))) & ((1u << D) - 1u);
+  return std::uint32_t(key >> (kSplit<D> * (kLevelsOf<D> - 1 - level))) & ((1u << kSplit<D>) - 1u);
 }
 
 // Lower bound on the distance between a point of [alo, ahi] and a point of
@@ -136,7 +143,7 @@ void CellList<D>::build(const Vec<D>* x, const Real* H, std::size_t n, const Box
 // (or a cell, whatever its size) becomes a group root.
 template <int D>
 std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, int level, bool in_group) {
-  constexpr int kLevels = morton_bits<D>;
+  constexpr int kLevels = kLevelsOf<D>;
   const bool small = end - begin <= max_cell_size_;
   // Levels where all particles share one octant add nothing: skip them.
   while (!small && level < kLevels && digit<D>(keys_[begin], level) == digit<D>(keys_[end - 1], level))
@@ -213,6 +220,10 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   const Real* hs = h_.data();
   const std::uint32_t* order = order_.data();
 
+  // Half the periodic lengths, computed as Box::separation computes them.
+  Real half[D];
+  for (int k = 0; k < D; ++k) half[k] = Real(0.5) * (box.hi[k] - box.lo[k]);
+
   // Pass 1: each thread appends the lists of the particles of its groups to
   // its own buffer and notes where each list is.
   const int threads = max_threads();
@@ -224,7 +235,11 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
 #pragma omp parallel num_threads(threads)
   {
     const int t = thread_id();
+    // buf grows but never shrinks; `used` entries are valid. Room for a
+    // whole cell is made before testing it, so that the test can write
+    // every candidate and advance only on a hit (no branch to mispredict).
     std::vector<std::uint32_t>& buf = buffers[t];
+    std::size_t used = 0;
     std::vector<std::uint32_t> near;  // cells within reach of the current group
 
 #pragma omp for schedule(dynamic, 2)
@@ -247,20 +262,40 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
       for (std::uint32_t a = g.begin; a < g.end; ++a) {
         const Vec<D> xa = xs[a];
         const Real ha = hs[a];
-        const std::size_t first = buf.size();
+        const std::size_t first = used;
         for (const std::uint32_t j : near) {
           const Node& m = nodes[j];
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
-          for (std::uint32_t b = m.begin; b < m.end; ++b) {
-            const Real r = std::max(ha, hs[b]);
-            if (norm2(box.separation(xa, xs[b])) < r * r && b != a) buf.push_back(order[b]);
+          if (buf.size() < used + (m.end - m.begin)) buf.resize(std::max(2 * buf.size(), used + 4096));
+          std::uint32_t* out = buf.data() + used;
+          std::size_t hits = 0;
+          // If no coordinate difference to this cell can exceed L/2, the
+          // minimum image is the plain difference (what separation would
+          // return, bit for bit): skip its wrap tests.
+          bool direct = true;
+          for (int k = 0; k < D; ++k)
+            if (box.periodic[k]) direct = direct && xa[k] - m.lo[k] <= half[k] && xa[k] - m.hi[k] >= -half[k];
+          if (direct) {
+            for (std::uint32_t b = m.begin; b < m.end; ++b) {
+              const Real r = std::max(ha, hs[b]);
+              out[hits] = order[b];
+              hits += (norm2(xa - xs[b]) < r * r) & (b != a);
+            }
+          } else {
+            for (std::uint32_t b = m.begin; b < m.end; ++b) {
+              const Real r = std::max(ha, hs[b]);
+              out[hits] = order[b];
+              hits += (norm2(box.separation(xa, xs[b])) < r * r) & (b != a);
+            }
           }
+          used += hits;
         }
         // Ascending input index (already so when the input was in spatial order).
-        if (!std::is_sorted(buf.begin() + first, buf.end())) std::sort(buf.begin() + first, buf.end());
+        const auto list = buf.begin() + std::ptrdiff_t(first), list_end = buf.begin() + std::ptrdiff_t(used);
+        if (!std::is_sorted(list, list_end)) std::sort(list, list_end);
         start[a] = first;
-        count[a] = std::uint32_t(buf.size() - first);
+        count[a] = std::uint32_t(used - first);
         owner[a] = t;
       }
     }

@@ -67,54 +67,54 @@ void HydroCpu<D>::summation_density_and_h() {
   for (int attempt = 0; attempt < 8; ++attempt) {
     build_neighbors(search_radius_);
     int outgrown = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : outgrown)
-    for (std::size_t a = 0; a < n; ++a) {
-      Real h = std::min(ps_.h[a], search_radius_[a]);
-      Real rho = 0, dwdh = 0;
-      for (int it = 0; it < kMaxNewton; ++it) {
-        rho = ps_.m[a] * kernel_w<D>(kernel_, Real(0), h);
-        dwdh = ps_.m[a] * kernel_dwdh<D>(kernel_, Real(0), h);
+#pragma omp parallel reduction(+ : outgrown)
+    {
+      std::vector<Real> r_nb;  // neighbour distances and masses, gathered once
+      std::vector<Real> m_nb;
+#pragma omp for schedule(dynamic, 256)
+      for (std::size_t a = 0; a < n; ++a) {
+        r_nb.clear();
+        m_nb.clear();
         for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
           const std::uint32_t b = nbrs_.index[k];
-          const Real r = norm(domain_.separation(ps_.x[a], ps_.x[b]));
-          if (r >= h) continue;
-          rho += ps_.m[b] * kernel_w<D>(kernel_, r, h);
-          dwdh += ps_.m[b] * kernel_dwdh<D>(kernel_, r, h);
+          r_nb.push_back(norm(domain_.separation(ps_.x[a], ps_.x[b])));
+          m_nb.push_back(ps_.m[b]);
         }
-        const Real h_new = newton_h_step<D>(h, rho, dwdh, hfact_, ps_.m[a]);
-        const bool converged = std::fabs(h_new - h) <= tol * h;
-        if (h_new > search_radius_[a]) {  // needs more neighbours than listed
+        // rho(h) and sum_b m_b dW/dh at h, self term included
+        auto sums = [&](Real h, Real& rho, Real& dwdh) {
+          rho = ps_.m[a] * kernel_w<D>(kernel_, Real(0), h);
+          dwdh = ps_.m[a] * kernel_dwdh<D>(kernel_, Real(0), h);
+          for (std::size_t k = 0; k < r_nb.size(); ++k) {
+            if (r_nb[k] >= h) continue;
+            rho += m_nb[k] * kernel_w<D>(kernel_, r_nb[k], h);
+            dwdh += m_nb[k] * kernel_dwdh<D>(kernel_, r_nb[k], h);
+          }
+        };
+        Real h = std::min(ps_.h[a], search_radius_[a]);
+        Real rho = 0, dwdh = 0;
+        bool converged = false;
+        for (int it = 0; it < kMaxNewton && !converged; ++it) {
+          sums(h, rho, dwdh);
+          const Real h_new = newton_h_step<D>(h, rho, dwdh, hfact_, ps_.m[a]);
+          converged = std::fabs(h_new - h) <= tol * h;
           h = h_new;
-          break;
+          if (h > search_radius_[a]) break;  // needs more neighbours than listed
         }
-        h = h_new;
-        if (converged) break;
-      }
-      if (h > search_radius_[a]) {
-        search_radius_[a] = kSkin * h;
+        if (h > search_radius_[a]) {
+          search_radius_[a] = kSkin * h;
+          ps_.h[a] = h;
+          ++outgrown;
+          continue;
+        }
+        sums(h, rho, dwdh);  // density and Omega at the converged h
         ps_.h[a] = h;
-        ++outgrown;
-        continue;
+        ps_.rho[a] = rho;
+        ps_.omega[a] = grad_h_omega<D>(h, rho, dwdh);
       }
-      // Final density and Omega at the converged h.
-      rho = ps_.m[a] * kernel_w<D>(kernel_, Real(0), h);
-      dwdh = ps_.m[a] * kernel_dwdh<D>(kernel_, Real(0), h);
-      for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
-        const std::uint32_t b = nbrs_.index[k];
-        const Real r = norm(domain_.separation(ps_.x[a], ps_.x[b]));
-        if (r >= h) continue;
-        rho += ps_.m[b] * kernel_w<D>(kernel_, r, h);
-        dwdh += ps_.m[b] * kernel_dwdh<D>(kernel_, r, h);
-      }
-      ps_.h[a] = h;
-      ps_.rho[a] = rho;
-      ps_.omega[a] = grad_h_omega<D>(h, rho, dwdh);
     }
-    if (outgrown == 0) {
-      // The force loop needs all pairs within max(h_a, h_b): the lists hold
-      // all pairs within max(search_a, search_b) >= that.
-      return;
-    }
+    // The force loop needs all pairs within max(h_a, h_b): the lists hold
+    // all pairs within max(search_a, search_b), which is at least that.
+    if (outgrown == 0) return;
   }
   throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
 }
@@ -122,7 +122,7 @@ void HydroCpu<D>::summation_density_and_h() {
 template <int D>
 void HydroCpu<D>::h_from_continuity_density() {
   const std::size_t n = ps_.n;
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
   for (std::size_t a = 0; a < n; ++a) ps_.h[a] = h_from_density<D>(hfact_, ps_.m[a], ps_.rho[a]);
   build_neighbors(ps_.h);
 }
@@ -130,7 +130,7 @@ void HydroCpu<D>::h_from_continuity_density() {
 template <int D>
 void HydroCpu<D>::equation_of_state() {
   const std::size_t n = ps_.n;
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
   for (std::size_t a = 0; a < n; ++a) {
     const EosState s = eos_evaluate(materials_[ps_.material_id[a]].eos, ps_.rho[a], ps_.u[a]);
     ps_.p[a] = s.p;
@@ -178,7 +178,7 @@ template <int D>
 Real HydroCpu<D>::dt_limit() const {
   const std::size_t n = ps_.n;
   Real dt = Real(1e30);
-#pragma omp parallel for reduction(min : dt)
+#pragma omp parallel for reduction(min : dt) if (n > 4096)
   for (std::size_t a = 0; a < n; ++a) {
     const MaterialParams& mat = materials_[ps_.material_id[a]];
     const Real hM = monaghan_h(ps_.h[a]);

@@ -23,7 +23,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   std::vector<Vec<D>> v_half(n);
   std::vector<Real> u_half(n), rho_half(evolve_rho ? n : 0);
 
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) {
     v_half[i] = ps.v[i] + half * ps.dvdt[i];
     u_half[i] = ps.u[i] + half * ps.dudt[i];
@@ -35,7 +35,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
     if (evolve_rho) ps.rho[i] = rho_half[i] + half * ps.drhodt[i];
   }
   sys.evaluate();
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) {
     ps.v[i] = v_half[i] + half * ps.dvdt[i];
     ps.u[i] = u_half[i] + half * ps.dudt[i];

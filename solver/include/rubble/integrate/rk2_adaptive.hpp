@@ -38,7 +38,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
 
   for (;;) {
     // stage 2: y_n + dt k1
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
       ps.x[i] = sys.domain().wrap(y0.x[i] + dt * y0.v[i]);
       ps.v[i] = y0.v[i] + dt * y0.dvdt[i];
@@ -50,7 +50,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
 
     // stage 3: y_n + dt/4 (k1 + k2)
     const Real q = Real(0.25) * dt;
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
       ps.x[i] = sys.domain().wrap(y0.x[i] + q * (y0.v[i] + y1.v[i]));
       ps.v[i] = y0.v[i] + q * (y0.dvdt[i] + y1.dvdt[i]);
@@ -67,7 +67,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
     const Real c23 = Real(2) / Real(3) * dt;
     Real err = 0;
     ParticleStore<D>& k3 = ps;
-#pragma omp parallel for reduction(max : err)
+#pragma omp parallel for reduction(max : err) if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
       const Vec<D> dx = c23 * (Real(0.5) * (y0.v[i] + y1.v[i]) - k3.v[i]);
       const Vec<D> dv = c23 * (Real(0.5) * (y0.dvdt[i] + y1.dvdt[i]) - k3.dvdt[i]);
@@ -85,7 +85,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
     const Real factor = std::clamp(grow, Real(0.2), Real(2));
     if (err <= tol || dt <= dt_min) {
       const Real h2 = Real(0.5) * dt;
-#pragma omp parallel for
+#pragma omp parallel for if (n > 4096)
       for (std::size_t i = 0; i < n; ++i) {
         ps.x[i] = sys.domain().wrap(y0.x[i] + h2 * (y0.v[i] + y1.v[i]));
         ps.v[i] = y0.v[i] + h2 * (y0.dvdt[i] + y1.dvdt[i]);
