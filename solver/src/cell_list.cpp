@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "rubble/neighbors/morton.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
@@ -36,18 +37,17 @@ std::string str(double v) {
   return s.str();
 }
 
-// Octant (quadrant, half) of a key at a level of the octree: its D bits
-// just below the `level` groups already fixed by the parents.
-#ifndef SPLIT_BITS
-#define SPLIT_BITS 1
-#endif
+// The tree over the keys splits one key bit per level: each level halves
+// its parent's region along the next axis (x, y, z, x, ...), so every D
+// levels are one octree level. Halving rather than splitting in 2^D keeps
+// the cells fuller (between about max_cell_size/2 and max_cell_size).
 template <int D>
-constexpr int kSplit = SPLIT_BITS == 1 ? 1 : D;
+constexpr int kKeyBits = D * morton_bits<D>;
+
+// Bit of a key that decides the side at a tree level (level 0: the top bit).
 template <int D>
-constexpr int kLevelsOf = D * morton_bits<D> / kSplit<D>;
-template <int D>
-std::uint32_t digit(std::uint64_t key, int level) {
-  return std::uint32_t(key >> (kSplit<D> * (kLevelsOf<D> - 1 - level))) & ((1u << kSplit<D>) - 1u);
+std::uint32_t key_bit(std::uint64_t key, int level) {
+  return std::uint32_t(key >> (kKeyBits<D> - 1 - level)) & 1u;
 }
 
 // Lower bound on the distance between a point of [alo, ahi] and a point of
@@ -138,15 +138,15 @@ void CellList<D>::build(const Vec<D>* x, const Real* H, std::size_t n, const Box
 }
 
 // Emit the node for sorted range [begin, end), whose keys agree on their
-// first `level` octant digits, and (recursively) its subtree. Returns its
+// first `level` bits, and (recursively) its subtree. Returns its
 // index. The first node down a branch with at most max_group_size particles
 // (or a cell, whatever its size) becomes a group root.
 template <int D>
 std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, int level, bool in_group) {
-  constexpr int kLevels = kLevelsOf<D>;
+  constexpr int kLevels = kKeyBits<D>;
   const bool small = end - begin <= max_cell_size_;
-  // Levels where all particles share one octant add nothing: skip them.
-  while (!small && level < kLevels && digit<D>(keys_[begin], level) == digit<D>(keys_[end - 1], level))
+  // Levels where all particles fall on one side add nothing: skip them.
+  while (!small && level < kLevels && key_bit<D>(keys_[begin], level) == key_bit<D>(keys_[end - 1], level))
     ++level;
 
   const std::uint32_t id = std::uint32_t(nodes_.size());
@@ -172,15 +172,13 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
     return id;
   }
 
-  // Split into the (non-empty) octants of the next digit; within this range
-  // the keys are sorted by that digit.
-  std::uint32_t first = begin;
-  while (first < end) {
-    const std::uint32_t d = digit<D>(keys_[first], level);
-    const std::uint32_t last = std::uint32_t(
-        std::partition_point(keys_.begin() + first, keys_.begin() + end,
-                             [&](std::uint64_t key) { return digit<D>(key, level) == d; }) -
-        keys_.begin());
+  // Split in two at the first key whose bit at this level is 1 (both halves
+  // are non-empty: the loop above stopped at a level where they differ).
+  const std::uint32_t mid = std::uint32_t(
+      std::partition_point(keys_.begin() + begin, keys_.begin() + end,
+                           [&](std::uint64_t key) { return key_bit<D>(key, level) == 0; }) -
+      keys_.begin());
+  for (const auto& [first, last] : {std::pair{begin, mid}, std::pair{mid, end}}) {
     const std::uint32_t child = build_node(first, last, level + 1, in_group);
     const Node c = nodes_[child];  // copy: build_node may have reallocated
     Node& p = nodes_[id];
@@ -189,7 +187,6 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
       p.hi[k] = std::max(p.hi[k], c.hi[k]);
     }
     p.h_max = std::max(p.h_max, c.h_max);
-    first = last;
   }
   nodes_[id].skip = std::uint32_t(nodes_.size());
   return id;

@@ -153,7 +153,7 @@ void HydroCpu<D>::rates() {
     Real dudt = 0, drhodt = 0, mu_max = 0;
     for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
       const std::uint32_t b = nbrs_.index[k];
-      const HydroPairRates<D> r = hydro_pair<D>(kernel_, pa, particle(b), domain_.separation(ps_.x[a], ps_.x[b]));
+      const HydroPairRates<D> r = hydro_pair<D>(kernel_, pa, particle(b), domain_.separation(ps_.x[a], ps_.x[b]), !summation_);
       dvdt += r.dvdt;
       dudt += r.dudt;
       drhodt += r.drhodt;

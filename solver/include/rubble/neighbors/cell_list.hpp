@@ -9,13 +9,15 @@
 // How: build() sorts the particles by Morton key and cuts the sorted order
 // into cells, each a contiguous range of at most max_cell_size particles
 // (more only for particles sharing one finest-level key). The cells are the
-// leaves of the adaptive octree the keys define: a node is split only while
-// it holds too many particles, so empty space costs nothing and dense
-// clusters get small cells (memory O(n) however clustered the set is). Every
-// node stores the tight bounds of its particles and their largest H.
+// leaves of the tree the keys define (each level halves its parent's region
+// along the next axis; every D levels are one octree level): a node is
+// split only while it holds too many particles, so empty space costs
+// nothing and dense clusters get small cells - memory is O(n) however
+// clustered the set is. Every node stores the tight bounds of its particles
+// and their largest H.
 // find_neighbors() takes the particles a group at a time (a subtree of at
 // most max_group_size particles), collects the cells within reach of the
-// group (distance < max of the two H_max) by walking the octree from the
+// group (distance < max of the two H_max) by walking the tree from the
 // root, then tests each particle against the cells within its own reach.
 // With one fixed cell size, a particle with a 10x larger H would scan 1000x
 // more cells; here the walk skips whole empty or far regions at once.
@@ -47,7 +49,9 @@ struct NeighborLists {
 template <int D>
 class CellList {
  public:
-  explicit CellList(std::uint32_t max_cell_size = 8, std::uint32_t max_group_size = 64)
+  // Tuning only (any values give the same neighbours): the most particles
+  // per cell, and per group of particles that share one tree walk.
+  explicit CellList(std::uint32_t max_cell_size = 32, std::uint32_t max_group_size = 64)
       : max_cell_size_(max_cell_size ? max_cell_size : 1), max_group_size_(max_group_size) {}
 
   // Build over n particles with support radii H (ideally already in spatial
@@ -59,7 +63,7 @@ class CellList {
   void build(const Vec<D>* x, const Real* H, std::size_t n, const Box<D>& box);
 
   // All pairs within max(H_a, H_b), self excluded. OpenMP-parallel over
-  // cells; the result does not depend on the number of threads.
+  // groups; the result does not depend on the number of threads.
   void find_neighbors(NeighborLists& out) const;
 
   std::size_t size() const { return x_.size(); }

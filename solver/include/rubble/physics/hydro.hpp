@@ -7,8 +7,13 @@
 //   du_a/dt  =   p_a/(Omega_a rho_a^2) sum_b m_b v_ab . g_a + 1/2 sum_b m_b Pi_ab v_ab . gbar
 //   drho_a/dt =  1/Omega_a sum_b m_b v_ab . g_a           (continuity density)
 //
-// With summation density Omega is the grad-h factor; with continuity
-// density Omega = 1. The pair force is antisymmetric in (a,b), so linear
+// With summation density Omega is the grad-h factor (Price 2012). With
+// continuity density Omega = 1 and both g_a and g_b are replaced by the
+// kernel-averaged gradient gbar (`symmetric`, Monaghan 1992 §3): with h
+// varying strongly across a density jump (8x in 1-D Sod), the unaveraged
+// form lets the first low-density particle at the jump decompress without
+// bound, while the averaged form keeps the pair geometry the same for both
+// particles. The pair force is antisymmetric in (a,b), so linear
 // momentum is conserved to round-off, and du/dt is the time derivative of
 // the thermal energy consistent with the work done by the pressure force.
 #include <cmath>
@@ -55,16 +60,18 @@ struct HydroPairRates {
 // particles' values, which keeps the pair force antisymmetric.
 template <int D>
 RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(KernelType kernel, const HydroParticle<D>& a,
-                                              const HydroParticle<D>& b, const Vec<D>& dx) {
+                                              const HydroParticle<D>& b, const Vec<D>& dx,
+                                              bool symmetric = false) {
   HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
   const Real r2 = norm2(dx);
   const Real r = std::sqrt(r2);
   if (r <= Real(0)) return out;
   if (r >= a.h && r >= b.h) return out;
 
-  const Vec<D> g_a = kernel_grad<D>(kernel, dx, a.h);
-  const Vec<D> g_b = kernel_grad<D>(kernel, dx, b.h);
+  Vec<D> g_a = kernel_grad<D>(kernel, dx, a.h);
+  Vec<D> g_b = kernel_grad<D>(kernel, dx, b.h);
   const Vec<D> gbar = Real(0.5) * (g_a + g_b);
+  if (symmetric) g_a = g_b = gbar;
   const Vec<D> dv = a.v - b.v;
 
   const Real fa = pressure_factor(a.p, a.omega, a.rho);
