@@ -264,7 +264,8 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
           const Node& m = nodes[j];
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
-          if (buf.size() < used + (m.end - m.begin)) buf.resize(std::max(2 * buf.size(), used + 4096));
+          const std::size_t room = used + (m.end - m.begin);
+          if (buf.size() < room) buf.resize(std::max(2 * buf.size(), room + 4096));
           std::uint32_t* out = buf.data() + used;
           std::size_t hits = 0;
           // If no coordinate difference to this cell can exceed L/2, the

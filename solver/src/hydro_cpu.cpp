@@ -47,7 +47,12 @@ void HydroCpu<D>::sort_particles() {
 template <int D>
 void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius) {
   const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
-  cells_.build(ps_.x.data(), search_radius.data(), ps_.n, box);
+  try {
+    cells_.build(ps_.x.data(), search_radius.data(), ps_.n, box);
+  } catch (const std::invalid_argument& e) {
+    // e.g. a smoothing length that grew past half a periodic length
+    throw RunError(e.what());
+  }
   cells_.find_neighbors(nbrs_);
   ++rebuilds_;
 }

@@ -94,6 +94,22 @@ class OutputWriter {
   std::unique_ptr<ConservedLog> log_;
 };
 
+// A periodic axis must be long enough that no particle's kernel (with the
+// neighbour search's 15 % skin) overlaps a second image of another particle.
+template <int D>
+void check_periodic_room(const Scene& scene, const Box<D>& domain, const ParticleStore<D>& ps) {
+  Real h_max = 0;
+  for (std::size_t i = 0; i < ps.n; ++i) h_max = std::max(h_max, ps.h[i]);
+  for (int k = 0; k < D; ++k) {
+    if (!domain.periodic[k]) continue;
+    if (Real(2.5) * h_max >= domain.length(k))
+      throw InputError(scene.file, "domain.max",
+                       "periodic length " + std::to_string(domain.length(k)) + " along axis " + std::to_string(k) +
+                           " is too short for the largest smoothing length " + std::to_string(h_max) +
+                           " (needs more than 2.5 h): enlarge the domain or refine the spacing");
+  }
+}
+
 template <int D>
 FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   const auto wall_start = std::chrono::steady_clock::now();
@@ -106,7 +122,9 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);
 
-  HydroCpu<D> sys(scene, ps, domain_from_scene<D>(scene));
+  const Box<D> domain = domain_from_scene<D>(scene);
+  check_periodic_room<D>(scene, domain, ps);
+  HydroCpu<D> sys(scene, ps, domain);
   sys.sort_particles();
   sys.evaluate();
 

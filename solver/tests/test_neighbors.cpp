@@ -491,12 +491,42 @@ TYPED_TEST(NeighborsTest, SmallPeriodicXLargeOpenRest) {
   EXPECT_GT(expect_matches_brute_force(s), 1.0);
 }
 
+// Positions given as other periodic images (here shifted by whole periods,
+// exactly representable, and one at -1e-30 that wraps to lo) give the same
+// neighbours as the wrapped positions.
+TYPED_TEST(NeighborsTest, PositionsOutsideThePeriodicBoxAreWrapped) {
+  constexpr int D = TypeParam::value;
+  const auto inside = lattice_set<D>(D == 1 ? 64 : (D == 2 ? 16 : 8), make_box<D>(0, 1, (1u << D) - 1), 1.7, 2.3);
+  auto outside = inside;
+  for (std::size_t i = 0; i < outside.x.size(); ++i)
+    for (int k = 0; k < D; ++k) outside.x[i][k] += Real(int((i + std::size_t(k)) % 5) - 2);  // -2 .. +2 periods
+  outside.x[0][0] = Real(-1e-30);  // inside.x[0][0] is 0
+  const NeighborLists a = cell_list_neighbors(inside), b = cell_list_neighbors(outside);
+  EXPECT_EQ(a.offset, b.offset);
+  EXPECT_EQ(a.index, b.index);
+  EXPECT_GT(a.index.size(), inside.x.size());
+}
+
 // Many particles at one point (more than a cell holds, with equal keys).
 TYPED_TEST(NeighborsTest, DuplicatePositions) {
   constexpr int D = TypeParam::value;
   auto s = uniform_set<D>(1000, make_box<D>(0, 1, 0b001), 0.4, 51);
   for (std::size_t i = 0; i < 200; ++i) s.x[500 + i] = s.x[3];
   EXPECT_GT(expect_matches_brute_force(s), 3.0);
+}
+
+// One cell far larger than max_cell_size: 5000 particles at one point
+// (equal keys cannot be split). All but one have H = 0, so each has that one
+// as its only neighbour and the output stays small.
+TYPED_TEST(NeighborsTest, HugeCellOfDuplicates) {
+  constexpr int D = TypeParam::value;
+  auto s = uniform_set<D>(500, make_box<D>(0, 1, 0b001), 0.4, 52);
+  const Vec<D> point = s.x[0];
+  for (int i = 0; i < 5000; ++i) {
+    s.x.push_back(point);
+    s.H.push_back(i == 0 ? Real(1e-6) : Real(0));
+  }
+  expect_matches_brute_force(s);
 }
 
 // Input already in spatial order: the same neighbours, renumbered.
