@@ -243,7 +243,7 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       const Node& g = nodes[groups_[gi]];
 
-      // Walk the octree depth first, skipping subtrees out of reach.
+      // Walk the tree depth first, skipping subtrees out of reach.
       near.clear();
       for (std::size_t i = 0; i < node_count;) {
         const Node& m = nodes[i];

@@ -16,7 +16,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <numeric>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -520,7 +519,7 @@ TYPED_TEST(NeighborsTest, DuplicatePositions) {
 // as its only neighbour and the output stays small.
 TYPED_TEST(NeighborsTest, HugeCellOfDuplicates) {
   constexpr int D = TypeParam::value;
-  auto s = uniform_set<D>(500, make_box<D>(0, 1, 0b001), 0.4, 52);
+  auto s = uniform_set<D>(500, make_box<D>(0, 1, 0b000), 0.2, 52);
   const Vec<D> point = s.x[0];
   for (int i = 0; i < 5000; ++i) {
     s.x.push_back(point);

@@ -57,7 +57,7 @@ class CellList {
   // Build over n particles with support radii H (ideally already in spatial
   // order: then the internal sort is a single check). Particle indices in
   // the results are indices into x and H. Positions on periodic axes may lie
-  // anywhere in [lo, hi). Throws std::invalid_argument on non-finite
+  // anywhere in [lo, hi) (others are wrapped into it). Throws std::invalid_argument on non-finite
   // positions, negative or non-finite H, a periodic axis with hi <= lo, or
   // H > L/2 on a periodic axis.
   void build(const Vec<D>* x, const Real* H, std::size_t n, const Box<D>& box);
