@@ -1,0 +1,242 @@
+// Unit tests of the solid-mechanics physics functions: Hooke's law with the
+// Jaumann rate, plane-strain J2, the symmetric eigen-solver used by the
+// artificial stress (against Eigen), the artificial stress itself, and the
+// kernel-gradient correction.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <random>
+
+#include "rubble/physics/artificial_stress.hpp"
+#include "rubble/physics/jaumann_rate.hpp"
+#include "rubble/physics/kernel_gradient_correction.hpp"
+#include "rubble/physics/kernels.hpp"
+#include "rubble/physics/symmetric_eigen.hpp"
+
+using namespace rubble;
+
+namespace {
+
+template <int D>
+Mat<D> random_symmetric(std::mt19937& gen) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  Mat<D> A;
+  for (int i = 0; i < D; ++i)
+    for (int j = i; j < D; ++j) A.m[i][j] = A.m[j][i] = U(gen);
+  return A;
+}
+
+template <int D>
+double max_abs_diff(const Mat<D>& a, const Mat<D>& b) {
+  double d = 0;
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) d = std::max(d, std::fabs(a.m[i][j] - b.m[i][j]));
+  return d;
+}
+
+// Rotation by angle t about z (2-D) or about the axis (1,2,3)/|.| (3-D).
+template <int D>
+Mat<D> rotation(double t);
+template <>
+Mat<2> rotation<2>(double t) {
+  Mat<2> Q;
+  Q.m[0][0] = std::cos(t); Q.m[0][1] = -std::sin(t);
+  Q.m[1][0] = std::sin(t); Q.m[1][1] = std::cos(t);
+  return Q;
+}
+template <>
+Mat<3> rotation<3>(double t) {
+  const double n[3] = {1 / std::sqrt(14.0), 2 / std::sqrt(14.0), 3 / std::sqrt(14.0)};
+  const double c = std::cos(t), s = std::sin(t);
+  Mat<3> Q;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) Q.m[i][j] = (i == j ? c : 0) + (1 - c) * n[i] * n[j];
+  Q.m[0][1] -= s * n[2]; Q.m[0][2] += s * n[1];
+  Q.m[1][0] += s * n[2]; Q.m[1][2] -= s * n[0];
+  Q.m[2][0] -= s * n[1]; Q.m[2][1] += s * n[0];
+  return Q;
+}
+
+// Rigid rotation with angular speed omega: L = dQ/dt Q^T is the constant
+// spin tensor; integrate dS/dt with RK4 and compare with Q S0 Q^T.
+template <int D>
+void check_corotation() {
+  std::mt19937 gen(7);
+  Mat<D> S0 = random_symmetric<D>(gen);
+  S0 -= (trace(S0) / D) * Mat<D>::identity();
+  const double omega = 0.7, h = 1e-3;
+  const Mat<D> L = (1 / h) * (rotation<D>(omega * h) - rotation<D>(-omega * h)) * 0.5;  // dQ/dt at t=0
+  Mat<D> S = S0;
+  const double mu = 3.0;
+  const int steps = 2000;
+  const double dt = 1.0 / steps;
+  for (int n = 0; n < steps; ++n) {
+    const Mat<D> k1 = deviatoric_stress_rate(S, L, mu);
+    const Mat<D> k2 = deviatoric_stress_rate(S + (0.5 * dt) * k1, L, mu);
+    const Mat<D> k3 = deviatoric_stress_rate(S + (0.5 * dt) * k2, L, mu);
+    const Mat<D> k4 = deviatoric_stress_rate(S + dt * k3, L, mu);
+    S += (dt / 6) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  }
+  const Mat<D> Q = rotation<D>(omega * 1.0);
+  const Mat<D> expected = Q * S0 * transpose(Q);
+  // |S| is unchanged (the rotation does no work)...
+  EXPECT_NEAR(double_dot(S, S), double_dot(S0, S0), 1e-9);
+  // ...and S turns with the body; the bound covers the finite-difference L
+  // (O(h^2) = 1e-7 relative) and RK4 (negligible at dt = 5e-4).
+  EXPECT_LT(max_abs_diff(S, expected), 1e-6);
+  // A strain-free rotation creates no deviatoric stress from nothing.
+  const Mat<D> zero_rate = deviatoric_stress_rate(Mat<D>::zero(), L, mu);
+  EXPECT_LT(max_abs_diff(zero_rate, Mat<D>::zero()), 1e-12);
+}
+
+}  // namespace
+
+TEST(JaumannRate, StressCoRotatesWithRigidRotation2D) { check_corotation<2>(); }
+TEST(JaumannRate, StressCoRotatesWithRigidRotation3D) { check_corotation<3>(); }
+
+// Uniaxial strain rate L = diag(e, 0, 0): dS_xx/dt = (4/3) mu e,
+// dS_yy/dt = dS_zz/dt = -(2/3) mu e (Hooke's law, deviatoric part).
+TEST(JaumannRate, UniaxialStrainRate) {
+  const double mu = 2.5, e = 0.3;
+  Mat<3> L = Mat<3>::zero();
+  L.m[0][0] = e;
+  const Mat<3> dS = deviatoric_stress_rate(Mat<3>::zero(), L, mu);
+  EXPECT_NEAR(dS.m[0][0], 4.0 / 3.0 * mu * e, 1e-14);
+  EXPECT_NEAR(dS.m[1][1], -2.0 / 3.0 * mu * e, 1e-14);
+  EXPECT_NEAR(dS.m[2][2], -2.0 / 3.0 * mu * e, 1e-14);
+  EXPECT_NEAR(dS.m[0][1], 0.0, 1e-15);
+
+  // 2-D plane strain: the same in-plane rates, and the implied S_zz rate
+  // -(dS_xx + dS_yy) equals the 3-D one.
+  Mat<2> L2 = Mat<2>::zero();
+  L2.m[0][0] = e;
+  const Mat<2> dS2 = deviatoric_stress_rate(Mat<2>::zero(), L2, mu);
+  EXPECT_NEAR(dS2.m[0][0], dS.m[0][0], 1e-14);
+  EXPECT_NEAR(dS2.m[1][1], dS.m[1][1], 1e-14);
+  EXPECT_NEAR(-(dS2.m[0][0] + dS2.m[1][1]), dS.m[2][2], 1e-14);
+}
+
+// Pure shear L_xy = g: dS_xy/dt = mu g (engineering shear rate g).
+TEST(JaumannRate, SimpleShearRate) {
+  const double mu = 1.7, g = 0.4;
+  Mat<2> L = Mat<2>::zero();
+  L.m[0][1] = g;
+  const Mat<2> dS = deviatoric_stress_rate(Mat<2>::zero(), L, mu);
+  EXPECT_NEAR(dS.m[0][1], mu * g, 1e-14);
+  EXPECT_NEAR(dS.m[1][0], mu * g, 1e-14);
+  EXPECT_NEAR(dS.m[0][0], 0.0, 1e-15);
+}
+
+// J2 includes the out-of-plane deviator: a 2-D state and the equivalent
+// 3-D state with S_zz = -(S_xx + S_yy) give the same J2.
+TEST(PlaneStrain, J2IncludesOutOfPlaneComponent) {
+  Mat<2> S2;
+  S2.m[0][0] = 1.0; S2.m[1][1] = 0.5; S2.m[0][1] = S2.m[1][0] = 0.3;
+  Mat<3> S3 = Mat<3>::zero();
+  S3.m[0][0] = 1.0; S3.m[1][1] = 0.5; S3.m[0][1] = S3.m[1][0] = 0.3; S3.m[2][2] = -1.5;
+  EXPECT_NEAR(deviatoric_j2(S2), deviatoric_j2(S3), 1e-14);
+  EXPECT_NEAR(deviatoric_j2(S3), 0.5 * (1 + 0.25 + 2.25 + 2 * 0.09), 1e-14);
+  Mat<1> S1;
+  S1.m[0][0] = 2.0;  // uniaxial: S_yy = S_zz = -1
+  EXPECT_NEAR(deviatoric_j2(S1), 0.5 * (4 + 1 + 1), 1e-14);
+}
+
+// The principal frame used by the artificial stress matches Eigen's
+// self-adjoint solver (eigenvalues to 1e-12, and A V = V diag(lambda)).
+template <int D>
+void check_eigen_against_eigen_library() {
+  std::mt19937 gen(11 + D);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Mat<D> A = random_symmetric<D>(gen);
+    const SymmetricEigen<D> ours = symmetric_eigen(A);
+    Eigen::Matrix<double, D, D> E;
+    for (int i = 0; i < D; ++i)
+      for (int j = 0; j < D; ++j) E(i, j) = A.m[i][j];
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> solver(E);
+    std::vector<double> mine(ours.lambda, ours.lambda + D);
+    std::sort(mine.begin(), mine.end());
+    for (int i = 0; i < D; ++i) EXPECT_NEAR(mine[i], solver.eigenvalues()(i), 1e-12);
+    for (int k = 0; k < D; ++k) {  // A v_k = lambda_k v_k, |v_k| = 1
+      double norm2 = 0;
+      for (int i = 0; i < D; ++i) {
+        double av = 0;
+        for (int j = 0; j < D; ++j) av += A.m[i][j] * ours.V.m[j][k];
+        EXPECT_NEAR(av, ours.lambda[k] * ours.V.m[i][k], 1e-12);
+        norm2 += ours.V.m[i][k] * ours.V.m[i][k];
+      }
+      EXPECT_NEAR(norm2, 1.0, 1e-12);
+    }
+  }
+}
+
+TEST(SymmetricEigen, MatchesEigenLibrary2D) { check_eigen_against_eigen_library<2>(); }
+TEST(SymmetricEigen, MatchesEigenLibrary3D) { check_eigen_against_eigen_library<3>(); }
+
+TEST(ArtificialStress, OnlyTensilePrincipalStressesAreCorrected) {
+  // principal stresses +2 (tension) and -1 (compression) along axes rotated by 30 degrees
+  const Mat<2> Q = rotation<2>(M_PI / 6);
+  Mat<2> P = Mat<2>::zero();
+  P.m[0][0] = 2.0;
+  P.m[1][1] = -1.0;
+  const Mat<2> sigma = Q * P * transpose(Q);
+  const double rho = 2.0, eps = 0.3;
+  const Mat<2> R = artificial_stress_tensor(sigma, rho, eps);
+  // In the principal frame R' = diag(-eps * 2 / rho^2, 0).
+  const Mat<2> Rp = transpose(Q) * R * Q;
+  EXPECT_NEAR(Rp.m[0][0], -eps * 2.0 / (rho * rho), 1e-13);
+  EXPECT_NEAR(Rp.m[1][1], 0.0, 1e-13);
+  EXPECT_NEAR(Rp.m[0][1], 0.0, 1e-13);
+  // purely compressive stress: no correction
+  const Mat<2> Rc = artificial_stress_tensor(-1.0 * Mat<2>::identity(), rho, eps);
+  EXPECT_LT(max_abs_diff(Rc, Mat<2>::zero()), 1e-15);
+}
+
+TEST(ArtificialStress, PairFactor) {
+  EXPECT_NEAR(artificial_stress_factor(0.5, 1.0, 4.0), 0.0625, 1e-15);
+  EXPECT_NEAR(artificial_stress_factor(1.0, 1.0, 4.0), 1.0, 1e-15);  // at r = dp
+  EXPECT_NEAR(artificial_stress_factor(0.5, 1.0, 2.5), std::pow(0.5, 2.5), 1e-15);
+  EXPECT_EQ(artificial_stress_factor(0.5, 0.0, 4.0), 0.0);
+}
+
+// On a regular 2-D lattice, the corrected gradient of a linear field is
+// exact, even at a free surface (corner particle), where the uncorrected
+// one is far off.
+TEST(KernelGradientCorrection, ReproducesLinearFieldsAtFreeSurface) {
+  const double dx = 0.1, H = 2.4 * dx, V = dx * dx;
+  auto field = [](const Vec<2>& x) { return 2.0 * x[0] - 3.0 * x[1]; };
+  for (int corner : {0, 1}) {
+    const Vec<2> xa = corner ? Vec<2>{{0.0, 0.0}} : Vec<2>{{1.0, 1.0}};  // corner or interior of a 21x21 block
+    Mat<2> sum = Mat<2>::zero();
+    Vec<2> grad_raw = Vec<2>::zero();
+    std::vector<std::pair<Vec<2>, Vec<2>>> pairs;
+    for (int i = 0; i <= 20; ++i)
+      for (int j = 0; j <= 20; ++j) {
+        const Vec<2> xb{{i * dx, j * dx}};
+        const Vec<2> d = xa - xb;
+        if (norm(d) == 0 || norm(d) >= H) continue;
+        const Vec<2> g = kernel_grad<2>(KernelType::CubicSpline, d, H);
+        sum += correction_pair_term<2>(1.0 * V, 1.0, xb - xa, g);
+        grad_raw += (V * (field(xb) - field(xa))) * g;
+        pairs.push_back({xb, g});
+      }
+    Mat<2> C;
+    ASSERT_TRUE(correction_matrix<2>(sum, 1e-3, C));
+    // corrected gradient: sum_b V (f_b - f_a) C grad W  (C applied to the kernel gradient)
+    Vec<2> grad = Vec<2>::zero();
+    for (const auto& [xb, g] : pairs) grad += (V * (field(xb) - field(xa))) * (C * g);
+    EXPECT_NEAR(grad[0], 2.0, 1e-12);
+    EXPECT_NEAR(grad[1], -3.0, 1e-12);
+    if (corner) {
+      EXPECT_GT(std::fabs(grad_raw[0] - 2.0), 0.5);  // uncorrected: badly off at the corner
+    }
+  }
+}
+
+TEST(KernelGradientCorrection, IllConditionedFallsBackToIdentity) {
+  Mat<2> sum = Mat<2>::zero();
+  sum.m[0][0] = 1.0;  // a single neighbour along x: rank 1
+  Mat<2> C;
+  EXPECT_FALSE(correction_matrix<2>(sum, 1e-3, C));
+  EXPECT_LT(max_abs_diff(C, Mat<2>::identity()), 1e-15);
+}
