@@ -2,12 +2,15 @@
 //
 //   rubble run SCENE.toml [--out DIR] [--backend cpu] [--set key=value ...] [--quiet]
 //   rubble info
+//   rubble eos MATERIAL --rho A:B:N --u C:D:M[:log] [--format table|csv] [--set key=value ...]
 //
 // Exit codes: 0 success, 1 unexpected error, 2 bad input or usage (the scene,
 // the options, an output directory that would be overwritten), 3 a run that
 // could not go on (RunError).
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -24,6 +27,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/run.hpp"
+#include "rubble/scene/materials.hpp"
 
 #ifndef RUBBLE_VERSION
 #define RUBBLE_VERSION "unknown"
@@ -79,6 +83,99 @@ int run_command(const RunArgs& args) {
   return 0;
 }
 
+// ---- rubble eos: tabulate p, c_s and the regime of a material (issue #3) ----
+
+struct EosArgs {
+  std::string material;
+  std::string rho, u;
+  std::string format = "table";
+  std::vector<std::string> sets;
+};
+
+// "A:B:N" (N points from A to B, ends included; N = 1 needs A = B) with an
+// optional ":log" for logarithmic spacing; A > 0, or A >= 0 if zero_allowed.
+std::vector<double> parse_range(const std::string& text, const std::string& option, bool zero_allowed) {
+  const std::string usage = "expected A:B:N or A:B:N:log (N points from A to B), got '" + text + "'";
+  std::vector<std::string> parts;
+  for (std::size_t start = 0;;) {
+    const auto colon = text.find(':', start);
+    parts.push_back(text.substr(start, colon == std::string::npos ? std::string::npos : colon - start));
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  if (parts.size() != 3 && parts.size() != 4) throw rubble::InputError(option, "", usage);
+  const bool log = parts.size() == 4;
+  if (log && parts[3] != "log") throw rubble::InputError(option, "", usage + "; the 4th part may only be 'log'");
+  auto number = [&](const std::string& s, const char* what) {
+    std::size_t used = 0;
+    double x = 0;
+    try {
+      x = std::stod(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (s.empty() || used != s.size() || !std::isfinite(x))
+      throw rubble::InputError(option, "", std::string(what) + " '" + s + "' is not a finite number; " + usage);
+    return x;
+  };
+  const double a = number(parts[0], "A"), b = number(parts[1], "B");
+  const double nd = number(parts[2], "N");
+  if (nd != std::floor(nd) || nd < 1 || nd > 1e6)
+    throw rubble::InputError(option, "", "N = '" + parts[2] + "' must be a whole number from 1 to 1e6; " + usage);
+  const long n = static_cast<long>(nd);
+  if (zero_allowed ? a < 0 : a <= 0)
+    throw rubble::InputError(option, "", std::string("A must be ") + (zero_allowed ? ">= 0" : "> 0") + ", got " + parts[0]);
+  if (log && a <= 0) throw rubble::InputError(option, "", "log spacing needs A > 0, got " + parts[0]);
+  if (n == 1 && a != b) throw rubble::InputError(option, "", "N = 1 needs A = B (one point); " + usage);
+  if (n > 1 && !(b > a)) throw rubble::InputError(option, "", "B must be > A, got " + parts[0] + ":" + parts[1]);
+  std::vector<double> v(static_cast<std::size_t>(n));
+  for (long i = 0; i < n; ++i) {
+    const double f = n == 1 ? 0.0 : double(i) / double(n - 1);
+    v[i] = log ? a * std::pow(b / a, f) : a + (b - a) * f;
+  }
+  if (n > 1) v.back() = b;
+  return v;
+}
+
+// The regime, plus the add-ons that changed the value: compressed,
+// expanded_cold+cutoff+c2_floor, ...
+std::string regime_label(const rubble::EosState& s) {
+  std::string r = rubble::eos_regime_name(s.regime);
+  if (s.limited & rubble::kEosTensionCutOff) r += "+cutoff";
+  if (s.limited & rubble::kEosPressureFloor) r += "+p_min";
+  if (s.limited & rubble::kEosSoundSpeedFloor) r += "+c2_floor";
+  if (s.limited & rubble::kEosMinSoundSpeed) r += "+cs_min";
+  return r;
+}
+
+int eos_command(const EosArgs& args) {
+  const std::vector<double> rho = parse_range(args.rho, "--rho", false);
+  const std::vector<double> u = parse_range(args.u, "--u", true);
+  const rubble::MaterialConfig m = rubble::load_material(args.material, args.sets);
+  const rubble::EosParams eos = rubble::eos_params_from_material(m);
+  const bool csv = args.format == "csv";
+  const char* names[] = {"ideal_gas", "murnaghan", "tillotson"};
+  if (csv) {
+    std::printf("rho,u,p,c_s,regime\n");
+  } else {
+    std::printf("# %s: %s EOS, from %s\n# source: %s\n", m.name.c_str(), names[static_cast<int>(m.eos)],
+                m.library_file.c_str(), m.source.c_str());
+    if (m.units == "SI") std::printf("# units: rho [kg/m^3], u [J/kg], p [Pa], c_s [m/s]\n");
+    else std::printf("# units: %s\n", m.units.c_str());
+    std::printf("%15s %15s %15s %15s  %s\n", "rho", "u", "p", "c_s", "regime");
+  }
+  for (double r : rho)
+    for (double e : u) {
+      const rubble::EosState s = rubble::eos_evaluate(eos, rubble::Real(r), rubble::Real(e));
+      const double cs = std::sqrt(std::max(double(s.c2), 0.0));
+      if (csv)
+        std::printf("%.17g,%.17g,%.17g,%.17g,%s\n", r, e, double(s.p), cs, regime_label(s).c_str());
+      else
+        std::printf("%15.7e %15.7e %15.7e %15.7e  %s\n", r, e, double(s.p), cs, regime_label(s).c_str());
+    }
+  return std::fflush(stdout) == 0 ? 0 : 1;
+}
+
 int info_command() {
   int threads = 1;
 #ifdef _OPENMP
@@ -120,6 +217,21 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("info", "Show version, backends, precision, OpenMP threads and GPU");
 
+  EosArgs eos_args;
+  CLI::App* eos = app.add_subcommand(
+      "eos", "Tabulate pressure, sound speed and regime of a material over a (rho, u) grid (docs/user-guide.md)");
+  eos->add_option("MATERIAL", eos_args.material,
+                  "A library material (reference_data/materials/NAME.toml, or $RUBBLE_MATERIALS) or a file NAME.toml")
+      ->required();
+  eos->add_option("--rho", eos_args.rho, "Densities A:B:N (N points from A to B) or A:B:N:log")->required();
+  eos->add_option("--u", eos_args.u, "Specific internal energies C:D:M or C:D:M:log")->required();
+  eos->add_option("--format", eos_args.format, "Output: an aligned table or CSV")
+      ->check(CLI::IsMember({"table", "csv"}))
+      ->capture_default_str();
+  eos->add_option("--set", eos_args.sets,
+                  "Override a material key, e.g. --set tillotson.A=3e10 or --set rho_limit=0.9 (repeatable)")
+      ->allow_extra_args(false);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -128,6 +240,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*run) return run_command(run_args);
+    if (*eos) return eos_command(eos_args);
     return info_command();
   } catch (const rubble::InputError& e) {
     std::cerr << "rubble: error: " << e.what() << "\n";

@@ -68,6 +68,7 @@ ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::
   r.step = step;
   r.dt = dt;
   const bool has_u = !ps.u.empty();
+  const bool has_phi = !ps.phi.empty();  // self-gravity on
   for (std::size_t i = 0; i < ps.n; ++i) {
     const double m = ps.m[i];
     double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
@@ -84,8 +85,8 @@ ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::
     r.angular_momentum[2] += m * (x[0] * v[1] - x[1] * v[0]);
     r.kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     if (has_u) r.internal += m * ps.u[i];
+    if (has_phi) r.gravitational += 0.5 * m * double(ps.phi[i]);
   }
-  r.gravitational = 0;
   r.total = r.kinetic + r.internal + r.gravitational;
   return r;
 }

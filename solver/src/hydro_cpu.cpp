@@ -10,6 +10,7 @@
 #include "rubble/physics/kernels.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/timestep.hpp"
+#include "rubble/scene/materials.hpp"
 
 namespace rubble {
 
@@ -17,8 +18,7 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
   std::vector<MaterialParams> out;
   for (const auto& m : scene.materials) {
     MaterialParams p{};
-    p.eos.kind = EosKind::IdealGas;
-    p.eos.ideal_gas.gamma = Real(m.gamma);
+    p.eos = eos_params_from_material(m);  // EOS and its add-on options (issue #3)
     p.av = {Real(m.viscosity.alpha), Real(m.viscosity.beta)};
     p.alpha_u = m.conductivity.enabled ? Real(m.conductivity.alpha_u) : Real(0);
     out.push_back(p);
@@ -36,7 +36,11 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
                                               : kernel_default_hfact(scene.simulation.kernel))),
       courant_(Real(scene.simulation.courant)),
       force_factor_(Real(scene.simulation.force_factor)),
-      summation_(scene.simulation.density == DensityForm::Summation) {}
+      summation_(scene.simulation.density == DensityForm::Summation),
+      gravity_(scene.gravity, scene.simulation.kernel) {
+  if (gravity_.enabled() && (D != 3 || ps_.a_grav.size() != ps_.n || ps_.phi.size() != ps_.n))
+    throw RunError("self-gravity needs a 3-D scene with the a_grav and phi fields allocated");
+}
 
 template <int D>
 void HydroCpu<D>::sort_particles() {
@@ -171,12 +175,25 @@ void HydroCpu<D>::rates() {
   }
 }
 
+// Self-gravity (3-D only): a_grav and phi from direct summation or the
+// octree, softened with h (or a fixed length); a_grav is added to dv/dt.
+template <int D>
+void HydroCpu<D>::self_gravity() {
+  if constexpr (D == 3) {
+    const std::size_t n = ps_.n;
+    gravity_.compute(ps_.x.data(), ps_.m.data(), ps_.h.data(), n, ps_.a_grav.data(), ps_.phi.data());
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) ps_.dvdt[a] += ps_.a_grav[a];
+  }
+}
+
 template <int D>
 void HydroCpu<D>::evaluate() {
   if (summation_) summation_density_and_h();
   else h_from_continuity_density();
   equation_of_state();
   rates();
+  if (gravity_.enabled()) self_gravity();
 }
 
 template <int D>

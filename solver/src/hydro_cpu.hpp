@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rubble/core/box.hpp"
+#include "rubble/gravity/self_gravity.hpp"
 #include "rubble/neighbors/cell_list.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/physics/artificial_viscosity.hpp"
@@ -47,6 +48,7 @@ class HydroCpu {
   void h_from_continuity_density();
   void equation_of_state();
   void rates();
+  void self_gravity();
 
   ParticleStore<D>& ps_;
   Box<D> domain_;
@@ -59,6 +61,7 @@ class HydroCpu {
   NeighborLists nbrs_;
   std::vector<Real> search_radius_;
   std::int64_t rebuilds_ = 0;
+  SelfGravity gravity_;  // off unless the scene's [gravity] turns it on (3-D)
 };
 
 }  // namespace rubble

@@ -1,11 +1,14 @@
 #include "rubble/scene/initial_conditions.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "hydro_cpu.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/physics/smoothing_length.hpp"
+#include "rubble/reference/lane_emden.hpp"
 
 namespace rubble {
 
@@ -22,10 +25,33 @@ double lattice_cell_volume(Lattice lattice, double dx) {
 
 namespace {
 
-// Lattice points inside [lo, hi). Cubic: cell centres. Hexagonal / HCP:
-// rows offset by dx/2, layers (3-D) in the A-B stacking of close packing.
+// Whether x belongs to a sphere or ring body (boxes keep every lattice point).
 template <int D>
-std::vector<Vec<D>> lattice_points(const BodyConfig& b) {
+bool inside_shape(const BodyConfig& b, const Vec<D>& x) {
+  if (b.shape != BodyShape::Sphere && b.shape != BodyShape::Ring) return true;
+  double r2 = 0;
+  for (int k = 0; k < D; ++k) r2 += (x[k] - b.center[k]) * (x[k] - b.center[k]);
+  const double r = std::sqrt(r2);
+  if (b.shape == BodyShape::Ring) return r >= b.inner_radius && r < b.radius;
+  return r < b.radius;
+}
+
+// Lattice points inside [lo, hi), then inside the body's shape. A sphere
+// or ring uses the box centre +- radius, with the lattice centred on the
+// body's centre so the shape is symmetric. Cubic: cell centres.
+// Hexagonal / HCP: rows offset by dx/2, layers (3-D) in the A-B stacking
+// of close packing.
+template <int D>
+std::vector<Vec<D>> lattice_points(BodyConfig b) {
+  if (b.shape == BodyShape::Sphere || b.shape == BodyShape::Ring) {
+    for (int k = 0; k < D; ++k) {
+      // a whole number of cells on each side of the centre, so that the
+      // lattice is symmetric about it
+      const double half = (std::floor(b.radius / b.spacing) + 1) * b.spacing;
+      b.min[k] = b.center[k] - half;
+      b.max[k] = b.center[k] + half;
+    }
+  }
   std::vector<Vec<D>> pts;
   const double dx = b.spacing;
   const bool hex = b.lattice == Lattice::HexagonalClosePacked && D >= 2;
@@ -52,8 +78,35 @@ std::vector<Vec<D>> lattice_points(const BodyConfig& b) {
         }
         bool inside = true;
         for (int k = 0; k < D; ++k) inside = inside && x[k] >= b.min[k] && x[k] < b.max[k];
-        if (inside) pts.push_back(x);
+        if (inside && inside_shape<D>(b, x)) pts.push_back(x);
       }
+  return pts;
+}
+
+// shape = "polytrope" (3-D): a lattice filling the unit ball with about
+// b.particles points, stretched radially so that the point at radius r_u
+// lands at the radius enclosing mass fraction r_u^3 of the polytrope: equal
+// masses then follow the Lane-Emden density profile.
+template <int D>
+std::vector<Vec<D>> polytrope_points(const BodyConfig& b, const Polytrope& model) {
+  std::vector<Vec<D>> pts;
+  if constexpr (D == 3) {
+    BodyConfig unit = b;
+    const double volume = 4.0 / 3.0 * std::numbers::pi / double(b.particles);  // per particle
+    unit.spacing = b.lattice == Lattice::HexagonalClosePacked ? std::cbrt(std::sqrt(2.0) * volume) : std::cbrt(volume);
+    for (int k = 0; k < 3; ++k) {
+      unit.min[k] = -1;
+      unit.max[k] = 1;
+    }
+    for (const Vec<3>& p : lattice_points<3>(unit)) {
+      const double ru = norm(p);
+      if (ru >= 1) continue;
+      const double r = model.radius_of_mass_fraction(ru * ru * ru);
+      Vec<3> x;
+      for (int k = 0; k < 3; ++k) x[k] = Real(b.center[k] + (ru > 0 ? p[k] / ru * r : 0.0));
+      pts.push_back(x);
+    }
+  }
   return pts;
 }
 
@@ -65,7 +118,10 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
   std::vector<std::vector<Vec<D>>> body_points;
   std::size_t total = 0;
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
-    body_points.push_back(lattice_points<D>(scene.bodies[i]));
+    const BodyConfig& b = scene.bodies[i];
+    body_points.push_back(b.shape == BodyShape::Polytrope
+                              ? polytrope_points<D>(b, Polytrope(b.polytropic_index, b.mass, b.radius, scene.gravity.G))
+                              : lattice_points<D>(b));
     if (body_points.back().empty())
       throw InputError(scene.file, "bodies[" + std::to_string(i) + "].spacing",
                        "the body holds no particle: spacing is larger than the box");
@@ -77,6 +133,33 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodyConfig& b = scene.bodies[i];
     const std::string key = "bodies[" + std::to_string(i) + "]";
+    if (b.shape == BodyShape::Polytrope) {
+      // Equal masses; density and pressure from the Lane-Emden profile at
+      // each particle's radius, internal energy from the pressure through
+      // the material's EOS. Near the surface the profile's density tends to
+      // 0: the first guess of h uses at least 5 % of the central density
+      // (summation density then finds h).
+      const Polytrope model(b.polytropic_index, b.mass, b.radius, scene.gravity.G);
+      const double m = b.mass / double(body_points[i].size());
+      const EosParams& eos = materials[b.material_id].eos;
+      for (const Vec<D>& x : body_points[i]) {
+        double r2 = 0;
+        for (int k = 0; k < D; ++k) r2 += (double(x[k]) - b.center[k]) * (double(x[k]) - b.center[k]);
+        const double rho = std::max(model.density(std::sqrt(r2)), 1e-300);
+        const double u = eos_internal_energy_from_pressure(eos, Real(rho), Real(model.pressure(std::sqrt(r2))));
+        if (!std::isfinite(u) || u < 0)
+          throw InputError(scene.file, key, "initial internal energy is not finite and non-negative");
+        ps.x[next] = x;
+        for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
+        ps.m[next] = Real(m);
+        ps.material_id[next] = b.material_id;
+        ps.rho[next] = Real(rho);
+        ps.u[next] = Real(u);
+        ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(std::max(rho, 0.05 * model.rho_c)));
+        ++next;
+      }
+      continue;
+    }
     const double m = b.density * lattice_cell_volume<D>(b.lattice, b.spacing);
     const EosParams& eos = materials[b.material_id].eos;
     const double u = b.pressure >= 0 ? eos_internal_energy_from_pressure(eos, Real(b.density), Real(b.pressure))

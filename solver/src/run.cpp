@@ -119,6 +119,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   FieldNeeds needs;
   needs.summation_density = sim.density == DensityForm::Summation;
   needs.continuity_density = sim.density == DensityForm::Continuity;
+  needs.gravity = scene.gravity.mode != GravityMode::Off;
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);
 
@@ -148,6 +149,8 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
     const double limit = sys.dt_limit();
     double dt = std::min(limit, next_output - t);
+    const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
+    if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
     if (sim.integrator == Integrator::Leapfrog) {
       leapfrog_step<D>(sys, ps, Real(dt));
     } else {
@@ -158,6 +161,12 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     }
     t += dt;
     ++step;
+    // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
+    if (damped) {
+      const Real f = Real(std::exp(-dt / sim.damping_time));
+#pragma omp parallel for if (ps.n > 4096)
+      for (std::size_t i = 0; i < ps.n; ++i) ps.v[i] *= f;
+    }
 
     std::size_t bad = 0;
     if (!all_finite(ps, bad)) {

@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -23,6 +25,7 @@
 
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
+#include "rubble/scene/materials.hpp"
 
 namespace rubble {
 namespace {
@@ -185,17 +188,35 @@ class SceneReader {
       : file_(std::move(file)), set_by_(std::move(set_by)) {}
 
   Scene read(const toml::table& root);
+  // A material file read on its own (`rubble eos`, load_material): the keys
+  // of a library file, messages with keys relative to the file.
+  MaterialConfig read_library_material(const std::string& name, const toml::table& t);
 
  private:
   std::string file_;
   std::map<std::string, std::string> set_by_;  // message key -> the --set text that wrote it
   int dim_ = 0;
+  // Materials merged from a library file and the scene are copies, which
+  // toml++ gives no source position: where each key came from, as text for
+  // messages (" (in library file F, line N)" or " (line N)").
+  std::map<std::string, std::string> origin_;
+  std::set<std::string> from_library_;  // message keys whose value came from a library file
+  std::map<std::string, std::string> library_of_;  // "materials.NAME" -> its library file
 
   // Throw an InputError; where known, say the line or the --set that set the value.
   [[noreturn]] void fail(const std::string& key, std::string problem, const toml::node* where = nullptr) const {
     for (const auto& [k, text] : set_by_)
       if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) {
         problem += " (set by --set " + text + ")";
+        throw InputError(file_, key, problem);
+      }
+    if (const auto o = origin_.find(key); o != origin_.end()) {
+      problem += o->second;
+      throw InputError(file_, key, problem);
+    }
+    for (const auto& [material, library_file] : library_of_)
+      if (key.rfind(material + ".", 0) == 0) {
+        problem += " (" + material + " is library file " + library_file + " plus the scene's overrides)";
         throw InputError(file_, key, problem);
       }
     if (where && where->source().begin.line > 0)
@@ -322,9 +343,20 @@ class SceneReader {
 
   void read_simulation(const toml::table& root, SimulationConfig& s);
   MaterialConfig read_material(const std::string& name, const toml::table& t);
+  MaterialConfig read_material_table(const std::string& p, const toml::table& t, bool library);
+  void read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c);
+  void read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c);
+  void read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o);
+  std::string resolve_library(const std::string& spec, const std::string& key, const toml::node* where) const;
+  void record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file);
   BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
+  void check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m, double rho,
+                                double pressure) const;
   void read_domain(const toml::table& t, DomainConfig& d);
   void read_output(const toml::table& t, OutputConfig& o);
+  // self-gravity (issue #5)
+  void read_gravity(const toml::table& t, GravityConfig& g);
+  BodyConfig read_polytrope_body(const std::string& p, const toml::table& t, const std::vector<MaterialConfig>& mats);
 };
 
 void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) {
@@ -333,7 +365,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "rk2_tolerance", "dt_initial", "dt_min", "max_steps"});
+              "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -382,27 +414,215 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
     if (*n <= 0) fail(p + ".max_steps", "is " + std::to_string(*n) + ", must be > 0", t->get("max_steps"));
     s.max_steps = *n;
   }
+  // Velocity damping (relaxation of initial conditions): both keys or neither.
+  const auto damping_time = number(*t, "damping_time", p);
+  const auto damping_end = number(*t, "damping_end", p);
+  if (damping_time.has_value() != damping_end.has_value())
+    fail(damping_time ? p + ".damping_end" : p + ".damping_time",
+         "missing; simulation.damping_time and simulation.damping_end go together");
+  if (damping_time) {
+    require(*damping_time > 0, *t, "damping_time", p, *damping_time, "> 0 (leave both damping keys out for none)");
+    require(*damping_end > 0 && *damping_end <= s.end_time, *t, "damping_end", p, *damping_end, "in (0, end_time]");
+    s.damping_time = *damping_time;
+    s.damping_end = *damping_end;
+  }
 }
 
-MaterialConfig SceneReader::read_material(const std::string& name, const toml::table& t) {
-  const std::string p = "materials." + name;
-  MaterialConfig m;
-  m.name = name;
-  if (!is_identifier(name)) fail(p, "material names may contain only letters, digits, '_' and '-'");
+// ---- materials (docs/scene.md "Materials"; issue #3) -------------------------
 
+bool ends_with(const std::string& s, std::string_view tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// A TOML file as a table; a malformed file is an InputError naming it.
+toml::table parse_toml_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file for reading");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  try {
+    return toml::parse(buf.str(), path);
+  } catch (const toml::parse_error& e) {
+    const auto& at = e.source().begin;
+    throw InputError(path, "",
+                     "malformed TOML at line " + std::to_string(at.line) + ", column " + std::to_string(at.column) +
+                         ": " + std::string(e.description()));
+  }
+}
+
+// Copy `src` into `dst`, key by key; tables present in both are merged, so
+// a scene may override a single parameter (tillotson.A) of a library table.
+void merge_tables(toml::table& dst, const toml::table& src) {
+  for (const auto& [k, n] : src) {
+    toml::node* d = dst.get(k.str());
+    if (d && d->is_table() && n.is_table()) merge_tables(*d->as_table(), *n.as_table());
+    else dst.insert_or_assign(k.str(), n);
+  }
+}
+
+// Where each key of `t` (under `prefix`) came from, for messages about the
+// merged copy: the library file and line, or the scene line.
+void SceneReader::record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file) {
+  for (const auto& [k, n] : t) {
+    const std::string key = sub(prefix, k.str());
+    const auto line = n.source().begin.line;
+    const std::string at = line > 0 ? "line " + std::to_string(line) : "";
+    if (!library_file.empty()) {
+      origin_[key] = " (in library file " + library_file + (at.empty() ? "" : ", " + at) + ")";
+      from_library_.insert(key);
+    } else {
+      origin_[key] = at.empty() ? "" : " (" + at + ")";
+      from_library_.erase(key);
+    }
+    if (const toml::table* inner = n.as_table()) record_origins(*inner, key, library_file);
+  }
+}
+
+// `library = SPEC`: a name from the library directory, or a file ending in
+// .toml (relative to the scene file's folder).
+std::string SceneReader::resolve_library(const std::string& spec, const std::string& key,
+                                         const toml::node* where) const {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (ends_with(spec, ".toml")) {
+    fs::path path(spec);
+    if (path.is_relative()) path = fs::path(file_).parent_path() / path;
+    if (!fs::is_regular_file(path, ec)) fail(key, "no such material file '" + path.string() + "'", where);
+    return path.string();
+  }
+  if (!is_identifier(spec))
+    fail(key, "is '" + spec + "'; expected a library material name (letters, digits, '_', '-') or a file ending in .toml",
+         where);
+  const std::string dir = materials_directory();
+  if (dir.empty())
+    fail(key, "no material library directory is known; set the environment variable RUBBLE_MATERIALS", where);
+  const fs::path path = fs::path(dir) / (spec + ".toml");
+  if (!fs::is_regular_file(path, ec)) {
+    const std::vector<std::string> names = library_material_names();
+    const std::string guess = closest(spec, names);
+    fail(key,
+         "unknown library material '" + spec + "'; the library (" + dir + ") has: " +
+             (names.empty() ? std::string("nothing") : join(names)) +
+             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+         where);
+  }
+  return path.string();
+}
+
+void SceneReader::read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c) {
+  const std::string tp = sub(p, "murnaghan");
+  const toml::table* t = table(mt, "murnaghan", p);
+  if (!t) fail(tp, "missing required table (the Murnaghan parameters: rho0 [kg/m^3], K0 [Pa], n)");
+  check_keys(*t, tp, {"rho0", "K0", "n"});
+  c.rho0 = required_number(*t, "rho0", tp, "reference density [kg/m^3], > 0");
+  c.K0 = required_number(*t, "K0", tp, "zero-pressure bulk modulus [Pa], > 0");
+  c.n = required_number(*t, "n", tp, "dimensionless exponent, > 0; n = 1 is the linear law");
+  require(c.rho0 > 0, *t, "rho0", tp, c.rho0, "> 0");
+  require(c.K0 > 0, *t, "K0", tp, c.K0, "> 0 (a bulk modulus)");
+  require(c.n > 0, *t, "n", tp, c.n, "> 0");
+}
+
+void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c) {
+  const std::string tp = sub(p, "tillotson");
+  const toml::table* t = table(mt, "tillotson", p);
+  if (!t) fail(tp, "missing required table (the Tillotson parameters: rho0, A, B, E0, E_iv, E_cv, a, b, alpha, beta)");
+  check_keys(*t, tp, {"rho0", "A", "B", "E0", "E_iv", "E_cv", "a", "b", "alpha", "beta"});
+  c.rho0 = required_number(*t, "rho0", tp, "reference density [kg/m^3], > 0");
+  c.A = required_number(*t, "A", tp, "bulk modulus [Pa], > 0");
+  c.B = required_number(*t, "B", tp, "nonlinear compression coefficient [Pa], >= 0");
+  c.E0 = required_number(*t, "E0", tp, "energy scale E0 [J/kg], > 0");
+  c.E_iv = required_number(*t, "E_iv", tp, "specific energy of incipient vaporisation [J/kg], > 0");
+  c.E_cv = required_number(*t, "E_cv", tp, "specific energy of complete vaporisation [J/kg], > E_iv");
+  c.a = required_number(*t, "a", tp, "dimensionless, >= 0");
+  c.b = required_number(*t, "b", tp, "dimensionless, >= 0");
+  c.alpha = required_number(*t, "alpha", tp, "dimensionless decay exponent, >= 0");
+  c.beta = required_number(*t, "beta", tp, "dimensionless decay exponent, >= 0");
+  require(c.rho0 > 0, *t, "rho0", tp, c.rho0, "> 0");
+  require(c.A > 0, *t, "A", tp, c.A, "> 0 (the bulk modulus)");
+  require(c.B >= 0, *t, "B", tp, c.B, ">= 0 (a modulus)");
+  require(c.E0 > 0, *t, "E0", tp, c.E0, "> 0");
+  require(c.E_iv > 0, *t, "E_iv", tp, c.E_iv, "> 0");
+  if (!(c.E_cv > c.E_iv)) {
+    // blame the one the scene changed, if only one came from a library file
+    const bool iv_here = !from_library_.count(tp + ".E_iv"), cv_here = !from_library_.count(tp + ".E_cv");
+    if (iv_here && !cv_here)
+      require(false, *t, "E_iv", tp, c.E_iv,
+              "< E_cv (" + fmt(c.E_cv) + "): complete vaporisation takes more energy than incipient vaporisation");
+    require(false, *t, "E_cv", tp, c.E_cv,
+            "> E_iv (" + fmt(c.E_iv) + "): complete vaporisation takes more energy than incipient vaporisation");
+  }
+  require(c.a >= 0, *t, "a", tp, c.a, ">= 0");
+  require(c.b >= 0, *t, "b", tp, c.b, ">= 0");
+  require(c.alpha >= 0, *t, "alpha", tp, c.alpha, ">= 0");
+  require(c.beta >= 0, *t, "beta", tp, c.beta, ">= 0");
+}
+
+// The add-on options (each off unless given): rho_limit, p_min, cs_min.
+void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o) {
+  if (eos == EosType::IdealGas && t.contains("rho_limit"))
+    fail(sub(p, "rho_limit"), "the ideal gas has no tension cut-off (it needs a reference density: murnaghan or tillotson)",
+         t.get("rho_limit"));
+  if (auto x = number(t, "rho_limit", p)) {
+    require(*x >= 0 && *x <= 1, t, "rho_limit", p, *x,
+            "in [0, 1]: the tension cut-off acts below rho/rho0 = rho_limit (0 = off)");
+    o.rho_limit = *x;
+  }
+  if (const toml::node* n = t.get("p_min")) {
+    if (const auto* s = n->as_string()) {
+      if (s->get() != "none") fail(sub(p, "p_min"), "is '" + s->get() + "'; expected a pressure [Pa] or \"none\"", n);
+      o.p_min_enabled = false;
+    } else {
+      o.p_min = as_number(*n, sub(p, "p_min"), "");
+      o.p_min_enabled = true;
+    }
+  }
+  if (auto x = number(t, "cs_min", p)) {
+    require(*x >= 0, t, "cs_min", p, *x, ">= 0 (0 = off)");
+    o.cs_min = *x;
+  }
+}
+
+// One material table, complete: the EOS and its parameters, the add-ons,
+// viscosity and conductivity; `library`: also source and units.
+MaterialConfig SceneReader::read_material_table(const std::string& p, const toml::table& t, bool library) {
+  MaterialConfig m;
   // The EOS decides which further keys belong here.
   const auto eos = string(t, "eos", p);
-  if (!eos) fail(p + ".eos", "missing required key (the equation of state; one of: ideal_gas)");
-  if (*eos != "ideal_gas")
-    fail(p + ".eos", "unknown equation of state '" + *eos + "'; expected one of: ideal_gas", t.get("eos"));
-  m.eos = EosType::IdealGas;
-  check_keys(t, p, {"eos", "gamma", "viscosity", "conductivity"});
+  if (!eos) fail(sub(p, "eos"), "missing required key (the equation of state; one of: ideal_gas, murnaghan, tillotson)");
+  m.eos = choice(t, "eos", p, EosType::IdealGas,
+                 {{"ideal_gas", EosType::IdealGas}, {"murnaghan", EosType::Murnaghan}, {"tillotson", EosType::Tillotson}});
+  // (rho_limit is known to every EOS so that the ideal gas can say why it
+  // has no tension cut-off)
+  std::vector<std::string> known = {"eos", "viscosity", "conductivity", "rho_limit", "p_min", "cs_min"};
+  if (m.eos == EosType::IdealGas) known.push_back("gamma");
+  if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
+  if (m.eos == EosType::Tillotson) known.push_back("tillotson");
+  if (library) known.insert(known.end(), {"source", "units", "description"});
+  check_keys(t, p, known);
 
-  m.gamma = required_number(t, "gamma", p, "the ideal_gas EOS needs gamma, the adiabatic index, > 1");
-  require(m.gamma > 1, t, "gamma", p, m.gamma, "> 1");
+  if (library) {
+    const auto source = string(t, "source", p);
+    if (!source || trim(*source).empty())
+      fail(sub(p, "source"), "missing: every library material names the source of its parameters (source = \"...\")",
+           t.get("source"));
+    m.source = *source;
+    m.units = choice(t, "units", p, std::string(), {{"SI", std::string("SI")}, {"dimensionless", std::string("dimensionless")}});
+    if (m.units.empty()) fail(sub(p, "units"), "missing: every library material states its units (\"SI\" or \"dimensionless\")");
+    string(t, "description", p);  // optional free text; must be a string
+  }
+
+  switch (m.eos) {
+    case EosType::IdealGas:
+      m.gamma = required_number(t, "gamma", p, "the ideal_gas EOS needs gamma, the adiabatic index, > 1");
+      require(m.gamma > 1, t, "gamma", p, m.gamma, "> 1");
+      break;
+    case EosType::Murnaghan: read_murnaghan(t, p, m.murnaghan); break;
+    case EosType::Tillotson: read_tillotson(t, p, m.tillotson); break;
+  }
+  read_eos_options(t, p, m.eos, m.eos_options);
 
   if (const toml::table* v = table(t, "viscosity", p)) {
-    const std::string vp = p + ".viscosity";
+    const std::string vp = sub(p, "viscosity");
     check_keys(*v, vp, {"alpha", "beta"});
     if (auto x = number(*v, "alpha", vp)) {
       require(*x >= 0, *v, "alpha", vp, *x, ">= 0");
@@ -414,7 +634,7 @@ MaterialConfig SceneReader::read_material(const std::string& name, const toml::t
     }
   }
   if (const toml::table* c = table(t, "conductivity", p)) {
-    const std::string cp = p + ".conductivity";
+    const std::string cp = sub(p, "conductivity");
     check_keys(*c, cp, {"enabled", "alpha_u"});
     if (auto b = boolean(*c, "enabled", cp)) m.conductivity.enabled = *b;
     if (auto x = number(*c, "alpha_u", cp)) {
@@ -425,16 +645,93 @@ MaterialConfig SceneReader::read_material(const std::string& name, const toml::t
   return m;
 }
 
+MaterialConfig SceneReader::read_library_material(const std::string& name, const toml::table& t) {
+  MaterialConfig m = read_material_table("", t, true);
+  m.name = m.library = name;
+  m.library_file = file_;
+  return m;
+}
+
+// A scene material: inline (every parameter here), or `library = "NAME"`
+// plus single keys overriding the library file's.
+MaterialConfig SceneReader::read_material(const std::string& name, const toml::table& t) {
+  const std::string p = "materials." + name;
+  if (!is_identifier(name)) fail(p, "material names may contain only letters, digits, '_' and '-'");
+  for (const char* k : {"source", "units", "description"})
+    if (t.contains(k))
+      fail(sub(p, k),
+           std::string("only library files carry '") + k +
+               "'; a scene material names its library file with library = \"NAME\" (docs/scene.md)",
+           t.get(k));
+
+  const auto spec = string(t, "library", p);
+  if (!spec) {
+    MaterialConfig m = read_material_table(p, t, false);
+    m.name = name;
+    return m;
+  }
+  const std::string path = resolve_library(*spec, sub(p, "library"), t.get("library"));
+  toml::table merged = parse_toml_file(path);
+  library_of_[p] = path;
+  if (merged.contains("library"))
+    throw InputError(path, "library", "a library file cannot itself refer to a library material");
+  record_origins(merged, p, path);
+  if (const toml::node* e = t.get("eos"); e && merged.contains("eos") && e->is_string() && merged.get("eos")->is_string() &&
+                                          e->as_string()->get() != merged.get("eos")->as_string()->get())
+    fail(sub(p, "eos"),
+         "is '" + e->as_string()->get() + "', but library material '" + *spec + "' is '" +
+             merged.get("eos")->as_string()->get() +
+             "'; a scene may override parameters, not the equation of state (define the material inline instead)",
+         e);
+  toml::table scene_part = t;
+  scene_part.erase("library");
+  record_origins(t, p, "");
+  merge_tables(merged, scene_part);
+
+  MaterialConfig m = read_material_table(p, merged, true);
+  m.name = name;
+  m.library = *spec;
+  m.library_file = path;
+  return m;
+}
+
+// A body given as pressure needs the u that gives it (initial_conditions.cpp
+// inverts the EOS); find out now, before any output, whether there is one.
+void SceneReader::check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m,
+                                           double rho, double pressure) const {
+  const EosParams e = eos_params_from_material(m);
+  if (eos_internal_energy_from_pressure(e, Real(rho), Real(pressure)) >= 0) return;
+  const std::string key = sub(p, "pressure");
+  if (m.eos == EosType::Murnaghan) {
+    const MurnaghanConfig& c = m.murnaghan;
+    const double base = 1 + c.n * pressure / c.K0;
+    fail(key,
+         "material '" + m.name + "' uses the Murnaghan EOS, which is isothermal: the pressure follows from the density (" +
+             fmt(eos_evaluate(e, Real(rho), Real(0)).p) + " Pa at density " + fmt(rho) +
+             "). Give internal_energy instead" +
+             (base > 0 ? ", or density = " + fmt(c.rho0 * std::pow(base, 1 / c.n)) + " for this pressure" : std::string()),
+         t.get("pressure"));
+  }
+  fail(key,
+       "no internal energy u >= 0 gives this pressure at density " + fmt(rho) + " with material '" + m.name +
+           "' (at u = 0 the pressure is already " + fmt(eos_evaluate(e, Real(rho), Real(0)).p) +
+           " Pa); give internal_energy instead, or a lower density",
+       t.get("pressure"));
+}
+
 BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
                                   const std::vector<MaterialConfig>& mats) {
   BodyConfig b;
+  if (const toml::node* s = t.get("shape"); s && s->is_string() && s->as_string()->get() == "polytrope")
+    return read_polytrope_body(p, t, mats);
   check_keys(t, p,
              {"shape", "material", "min", "max", "spacing", "lattice", "density", "pressure", "internal_energy",
               "velocity"});
 
   const auto shape = string(t, "shape", p);
-  if (!shape) fail(p + ".shape", "missing required key (one of: box)");
-  if (*shape != "box") fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box", t.get("shape"));
+  if (!shape) fail(p + ".shape", "missing required key (one of: box, polytrope)");
+  if (*shape != "box")
+    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, polytrope", t.get("shape"));
   b.shape = BodyShape::Box;
 
   const auto material = string(t, "material", p);
@@ -491,6 +788,7 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   if (pressure) {
     require(*pressure >= 0, t, "pressure", p, *pressure, ">= 0");
     b.pressure = *pressure;
+    check_pressure_reachable(p, t, mats[b.material_id], b.density, *pressure);
   } else {
     require(*energy >= 0, t, "internal_energy", p, *energy, ">= 0");
     b.internal_energy = *energy;
@@ -548,11 +846,115 @@ void SceneReader::read_output(const toml::table& t, OutputConfig& o) {
   if (auto b = boolean(t, "snapshots", p)) o.snapshots = *b;
 }
 
+// ---- self-gravity (docs/scene.md "[gravity]"; issue #5) ------------------------
+
+void SceneReader::read_gravity(const toml::table& t, GravityConfig& g) {
+  const std::string p = "gravity";
+  check_keys(t, p, {"mode", "theta", "order", "G", "softening", "leaf_size", "group_size"});
+  g.mode = choice(t, "mode", p, GravityMode::Off,
+                  {{"off", GravityMode::Off}, {"direct", GravityMode::Direct}, {"barnes_hut", GravityMode::BarnesHut}});
+  if (g.mode != GravityMode::Off && dim_ != 3)
+    fail(p + ".mode", "self-gravity needs simulation.dimension = 3 (it is " + std::to_string(dim_) + ")", t.get("mode"));
+  if (auto x = number(t, "theta", p)) {
+    require(*x >= 0 && *x <= 1, t, "theta", p, *x, "in [0, 1] (0 opens every node: direct summation)");
+    g.theta = *x;
+  }
+  g.order = choice(t, "order", p, MultipoleOrder::Quadrupole,
+                   {{"monopole", MultipoleOrder::Monopole}, {"quadrupole", MultipoleOrder::Quadrupole}});
+  if (auto x = number(t, "G", p)) {
+    require(*x > 0, t, "G", p, *x, "> 0 [m^3 kg^-1 s^-2]");
+    g.G = *x;
+  }
+  // softening: "smoothing_length" (eps = h) or a fixed length [m] >= 0.
+  if (const toml::node* n = t.get("softening")) {
+    if (const auto* str = n->as_string()) {
+      if (str->get() != "smoothing_length") {
+        const std::string guess = closest(str->get(), {"smoothing_length"});
+        fail(p + ".softening",
+             "unknown value '" + str->get() + "'; expected \"smoothing_length\" or a length [m] >= 0" +
+                 (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+             n);
+      }
+      g.softening = GravitySoftening::SmoothingLength;
+    } else if (n->is_integer() || n->is_floating_point()) {
+      const double x = as_number(*n, p + ".softening", "");
+      require(x >= 0, t, "softening", p, x, ">= 0 [m] (0 = point masses), or \"smoothing_length\"");
+      g.softening = GravitySoftening::Fixed;
+      g.softening_length = x;
+    } else {
+      fail(p + ".softening", "expected \"smoothing_length\" or a length [m], got " + type_name(*n), n);
+    }
+  }
+  if (auto n = integer(t, "leaf_size", p)) {
+    if (*n < 1 || *n > 1024) fail(p + ".leaf_size", "is " + std::to_string(*n) + ", must be in [1, 1024]", t.get("leaf_size"));
+    g.leaf_size = static_cast<int>(*n);
+  }
+  if (auto n = integer(t, "group_size", p)) {
+    if (*n < 0 || *n > 65536)
+      fail(p + ".group_size", "is " + std::to_string(*n) + ", must be in [0, 65536] (0 or 1: every particle walks alone)",
+           t.get("group_size"));
+    g.group_size = static_cast<int>(*n);
+  }
+}
+
+// shape = "polytrope": a self-gravitating polytrope (docs/scene.md).
+BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::table& t,
+                                            const std::vector<MaterialConfig>& mats) {
+  BodyConfig b;
+  b.shape = BodyShape::Polytrope;
+  b.lattice = Lattice::HexagonalClosePacked;
+  check_keys(t, p,
+             {"shape", "material", "center", "radius", "mass", "polytropic_index", "particles", "lattice", "velocity"});
+  if (dim_ != 3) fail(p + ".shape", "'polytrope' needs simulation.dimension = 3", t.get("shape"));
+
+  const auto material = string(t, "material", p);
+  if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
+  std::vector<std::string> names;
+  for (const auto& m : mats) names.push_back(m.name);
+  const auto it = std::find(names.begin(), names.end(), *material);
+  if (it == names.end()) {
+    const std::string guess = closest(*material, names);
+    fail(p + ".material",
+         "unknown material '" + *material + "'; defined materials: " + join(names) +
+             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+         t.get("material"));
+  }
+  b.material = *material;
+  b.material_id = static_cast<int>(it - names.begin());
+  if (mats[b.material_id].eos != EosType::IdealGas)
+    fail(p + ".material", "a polytrope needs an ideal_gas material (material '" + *material + "' is not)",
+         t.get("material"));
+
+  if (auto c = vector(t, "center", p)) b.center = *c;
+  b.radius = required_number(t, "radius", p, "the outer radius [m], > 0");
+  require(b.radius > 0, t, "radius", p, b.radius, "> 0");
+  b.mass = required_number(t, "mass", p, "the total mass [kg], > 0");
+  require(b.mass > 0, t, "mass", p, b.mass, "> 0");
+  if (auto x = number(t, "polytropic_index", p)) {
+    require(*x > 0 && *x < 5, t, "polytropic_index", p, *x, "in (0, 5) (a finite radius)");
+    b.polytropic_index = *x;
+  }
+  const auto n = integer(t, "particles", p);
+  if (!n) fail(p + ".particles", "missing required key (the approximate number of particles, >= 100)");
+  if (*n < 100 || *n > 1'000'000'000)
+    fail(p + ".particles", "is " + std::to_string(*n) + ", must be in [100, 1e9]", t.get("particles"));
+  b.particles = *n;
+  b.lattice = choice(t, "lattice", p, Lattice::HexagonalClosePacked,
+                     {{"cubic", Lattice::Cubic}, {"hcp", Lattice::HexagonalClosePacked}});
+  if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  for (int a = 0; a < 3; ++a) {
+    b.min[a] = b.center[a] - b.radius;
+    b.max[a] = b.center[a] + b.radius;
+  }
+  return b;
+}
+
 Scene SceneReader::read(const toml::table& root) {
   Scene scene;
   scene.file = file_;
-  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output"});
+  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity"});
   read_simulation(root, scene.simulation);
+  if (const toml::table* g = table(root, "gravity", "")) read_gravity(*g, scene.gravity);
 
   // Materials, in declaration order (toml++ keeps tables sorted by key, so
   // order by source position; ones created by --set come last).
@@ -588,6 +990,13 @@ Scene SceneReader::read(const toml::table& root) {
 
   if (const toml::table* d = table(root, "domain", "")) read_domain(*d, scene.domain);
   if (const toml::table* o = table(root, "output", "")) read_output(*o, scene.output);
+
+  // Self-gravity has no periodic images (no Ewald sums): open boundaries only.
+  if (scene.gravity.mode != GravityMode::Off)
+    for (int a = 0; a < dim_; ++a)
+      if (scene.domain.periodic[a])
+        fail("gravity.mode", "self-gravity needs open boundaries, but domain.periodic makes axis " +
+                                 std::to_string(a) + " periodic; set gravity.mode = \"off\" or make every axis open");
 
   // Bodies must lie inside the domain along periodic axes.
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
@@ -649,6 +1058,61 @@ Scene load_scene_file(const std::string& path, const std::vector<std::string>& o
   buf << in.rdbuf();
   if (in.bad()) throw InputError(path, "", "error while reading the file");
   return parse_scene(buf.str(), path, overrides);
+}
+
+}  // namespace rubble
+
+// ---- the material library (materials.hpp) ------------------------------------
+
+namespace rubble {
+
+std::string materials_directory() {
+  if (const char* env = std::getenv("RUBBLE_MATERIALS"); env != nullptr && *env != '\0') return env;
+#ifdef RUBBLE_MATERIALS_DIR
+  return RUBBLE_MATERIALS_DIR;
+#else
+  return "";
+#endif
+}
+
+std::vector<std::string> library_material_names() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  const std::string dir = materials_directory();
+  if (dir.empty() || !fs::is_directory(dir, ec)) return names;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.is_regular_file(ec) && entry.path().extension() == ".toml") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+MaterialConfig load_material(const std::string& name_or_path, const std::vector<std::string>& overrides) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  std::string path, name = name_or_path;
+  if (ends_with(name_or_path, ".toml")) {
+    path = name_or_path;
+    name = fs::path(path).stem().string();
+    if (!fs::is_regular_file(path, ec)) throw InputError(path, "", "no such material file");
+  } else {
+    const std::string dir = materials_directory();
+    const std::vector<std::string> names = library_material_names();
+    if (dir.empty()) throw InputError(name_or_path, "", "no material library directory is known; set RUBBLE_MATERIALS");
+    if (!is_identifier(name_or_path) || std::find(names.begin(), names.end(), name_or_path) == names.end()) {
+      const std::string guess = closest(name_or_path, names);
+      throw InputError(name_or_path, "",
+                       "unknown material; the library (" + dir + ") has: " +
+                           (names.empty() ? std::string("nothing") : join(names)) +
+                           (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+                           "; a material file can be given by its path (NAME.toml)");
+    }
+    path = (fs::path(dir) / (name_or_path + ".toml")).string();
+  }
+  toml::table root = parse_toml_file(path);
+  std::map<std::string, std::string> set_by;
+  for (const auto& o : overrides) set_by[apply_override(root, o, path)] = o;
+  return SceneReader(path, set_by).read_library_material(name, root);
 }
 
 }  // namespace rubble

@@ -9,8 +9,10 @@
 //   y_heun = y_n + dt/2 (k1 + k2)
 //   y_rk3  = y_n + dt/6 (k1 + k2 + 4 k3)
 //   err = max over particles and fields of |y_heun - y_rk3| / scale
-// with scale h for positions, |v| + c_s for velocities, |u| + 1e-3 <|u|>
-// for internal energy and rho for density. A step with err > tol is
+// with scale h for positions, |v| + c_s for velocities, |u| + c_s^2 for the
+// internal energy (c_s^2 is the medium's mechanical energy scale, so a cold
+// solid with u = 0 is not held to an absolute error of zero) and rho for
+// density. A step with err > tol is
 // rejected and retried; the next step size is
 //   dt_new = dt * clamp(0.9 (tol/err)^(1/3), 0.2, 2),
 // never above the Courant and force limits.
@@ -61,9 +63,6 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
 
     // Heun solution and the error against SSP-RK3:
     // y_heun - y_rk3 = (2/3) dt [ (k1 + k2)/2 - k3 ].
-    Real u_mean = 0;
-    for (std::size_t i = 0; i < n; ++i) u_mean += std::fabs(y0.u[i]);
-    u_mean = n ? u_mean / Real(n) : Real(0);
     const Real c23 = Real(2) / Real(3) * dt;
     Real err = 0;
     ParticleStore<D>& k3 = ps;
@@ -73,7 +72,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       const Vec<D> dv = c23 * (Real(0.5) * (y0.dvdt[i] + y1.dvdt[i]) - k3.dvdt[i]);
       const Real du = c23 * (Real(0.5) * (y0.dudt[i] + y1.dudt[i]) - k3.dudt[i]);
       Real e = std::max(norm(dx) / y0.h[i], norm(dv) / (norm(y0.v[i]) + y0.cs[i] + Real(1e-300)));
-      e = std::max(e, std::fabs(du) / (std::fabs(y0.u[i]) + Real(1e-3) * u_mean + Real(1e-300)));
+      e = std::max(e, std::fabs(du) / (std::fabs(y0.u[i]) + y0.cs[i] * y0.cs[i] + Real(1e-300)));
       if (evolve_rho) {
         const Real drho = c23 * (Real(0.5) * (y0.drhodt[i] + y1.drhodt[i]) - k3.drhodt[i]);
         e = std::max(e, std::fabs(drho) / y0.rho[i]);

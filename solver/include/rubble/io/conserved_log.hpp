@@ -27,7 +27,7 @@ struct ConservedRecord {
   double angular_momentum[3] = {0, 0, 0};  // L = sum m x cross v; 2-D: only [2]
   double kinetic = 0;                      // sum 1/2 m |v|^2
   double internal = 0;                     // sum m u
-  double gravitational = 0;
+  double gravitational = 0;                // 1/2 sum m phi (self-gravity; 0 without)
   double total = 0;                        // kinetic + internal + gravitational
 };
 
@@ -48,7 +48,8 @@ class ConservedLog {
 };
 
 // Mass, momentum, angular momentum (about the origin), kinetic and internal
-// energy of the particles; gravitational energy is 0 until gravity lands.
+// energy of the particles, and the gravitational energy 1/2 Σ m phi from
+// the potential of the last evaluation (0 when gravity is off).
 // Sums run in double whatever Real is.
 template <int D>
 ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt);

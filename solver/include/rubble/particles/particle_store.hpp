@@ -24,6 +24,7 @@ struct FieldNeeds {
   bool continuity_density = false;  // rho is evolved (d rho/dt stored)
   bool summation_density = false;   // grad-h factor omega is stored
   bool conductivity = false;
+  bool gravity = false;             // self-gravity: a_grav and phi are stored
 };
 
 template <int D>
@@ -51,6 +52,10 @@ struct ParticleStore {
   std::vector<Real> dudt;     // [J/kg/s]
   std::vector<Real> drhodt;   // [kg/m^3/s] (continuity density only)
   std::vector<Real> mu_max;   // largest viscous approach speed |mu_ab| seen [m/s]
+
+  // self-gravity (allocated only when gravity is on)
+  std::vector<Vec<D>> a_grav;  // gravitational acceleration [m/s^2] (included in dvdt)
+  std::vector<Real> phi;       // gravitational potential [J/kg]; energy = 1/2 Σ m phi
 
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
@@ -94,6 +99,8 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"dudt", &S::dudt, "J/kg/s", FieldRole::Rate, false},
       {"drhodt", &S::drhodt, "kg/m^3/s", FieldRole::Rate, false},
       {"mu_max", &S::mu_max, "m/s", FieldRole::Derived, false},
+      {"a_grav", &S::a_grav, "m/s^2", FieldRole::Derived, true},
+      {"phi", &S::phi, "J/kg", FieldRole::Derived, false},
   };
   return table;
 }
@@ -118,6 +125,10 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   if (needs.summation_density) omega.assign(n, 1);
   if (needs.continuity_density) {
     drhodt.assign(n, 0);
+  }
+  if (needs.gravity) {
+    a_grav.assign(n, Vec<D>::zero());
+    phi.assign(n, 0);
   }
 }
 

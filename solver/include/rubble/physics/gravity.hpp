@@ -198,26 +198,43 @@ RUBBLE_HD_INLINE void quadrupole_add_point(Real q[6], Real m, const Vec<3>& d) {
     for (int k = j; k < 3; ++k) q[sym_index(j, k)] += m * (Real(3) * d[j] * d[k] - (j == k ? d2 : Real(0)));
 }
 
-// Field at r = x_target - c of a multipole (mass M, traceless quadrupole q
-// about the centre of mass c). The expansion is unsoftened: use it only where
-// the opening criterion above holds.
-RUBBLE_HD_INLINE void multipole_add(const Vec<3>& r, Real mass, const Real q[6], MultipoleOrder order, GravityField& f) {
-  const Real r2 = norm2(r);
-  const Real inv_r2 = Real(1) / r2;
-  const Real inv_r = std::sqrt(inv_r2);
+// Field at r = (rx, ry, rz) = x_target - c of a multipole (mass M,
+// traceless quadrupole q0..q5 = xx, xy, xz, yy, yz, zz about the centre of
+// mass c), added to (ax, ay, az, phi); scalar arguments so that a loop over
+// many multipoles vectorises. The expansion is unsoftened: use it only where
+// the opening criterion below holds.
+template <bool Quadrupole>
+RUBBLE_HD_INLINE void multipole_field(Real rx, Real ry, Real rz, Real mass, Real q0, Real q1, Real q2, Real q3,
+                                      Real q4, Real q5, Real& ax, Real& ay, Real& az, Real& phi) {
+  const Real r2 = rx * rx + ry * ry + rz * rz;
+  const Real inv_r = Real(1) / std::sqrt(r2);
+  const Real inv_r2 = inv_r * inv_r;
   const Real inv_r3 = inv_r * inv_r2;
-  f.a -= r * (mass * inv_r3);
-  f.phi -= mass * inv_r;
-  if (order == MultipoleOrder::Quadrupole) {
-    Vec<3> qr;
-    qr[0] = q[0] * r[0] + q[1] * r[1] + q[2] * r[2];
-    qr[1] = q[1] * r[0] + q[3] * r[1] + q[4] * r[2];
-    qr[2] = q[2] * r[0] + q[4] * r[1] + q[5] * r[2];
-    const Real rqr = dot(r, qr);
+  Real s = mass * inv_r3;  // coefficient of -r in a
+  phi -= mass * inv_r;
+  if (Quadrupole) {
+    const Real qx = q0 * rx + q1 * ry + q2 * rz;
+    const Real qy = q1 * rx + q3 * ry + q4 * rz;
+    const Real qz = q2 * rx + q4 * ry + q5 * rz;
+    const Real rqr = rx * qx + ry * qy + rz * qz;
     const Real inv_r5 = inv_r3 * inv_r2;
-    f.a += qr * inv_r5 - r * (Real(2.5) * rqr * inv_r5 * inv_r2);
-    f.phi -= Real(0.5) * rqr * inv_r5;
+    ax += qx * inv_r5;
+    ay += qy * inv_r5;
+    az += qz * inv_r5;
+    s += Real(2.5) * rqr * inv_r5 * inv_r2;
+    phi -= Real(0.5) * rqr * inv_r5;
   }
+  ax -= rx * s;
+  ay -= ry * s;
+  az -= rz * s;
+}
+
+// The same for a Vec separation and a stored quadrupole q[6].
+RUBBLE_HD_INLINE void multipole_add(const Vec<3>& r, Real mass, const Real q[6], MultipoleOrder order, GravityField& f) {
+  if (order == MultipoleOrder::Quadrupole)
+    multipole_field<true>(r[0], r[1], r[2], mass, q[0], q[1], q[2], q[3], q[4], q[5], f.a[0], f.a[1], f.a[2], f.phi);
+  else
+    multipole_field<false>(r[0], r[1], r[2], mass, q[0], q[1], q[2], q[3], q[4], q[5], f.a[0], f.a[1], f.a[2], f.phi);
 }
 
 // Radius beyond which a node's multipole may be used (first condition of

@@ -9,13 +9,14 @@
 #include <vector>
 
 #include "rubble/core/real.hpp"
+#include "rubble/physics/gravity.hpp"
 #include "rubble/physics/kernel_type.hpp"
 
 namespace rubble {
 
 enum class DensityForm : int { Summation = 0, Continuity = 1 };
 enum class Integrator : int { RK2Adaptive = 0, Leapfrog = 1 };
-enum class EosType : int { IdealGas = 0 };
+enum class EosType : int { IdealGas = 0, Murnaghan = 1, Tillotson = 2 };
 
 struct SimulationConfig {
   int dimension = 0;                        // 1, 2 or 3 (required)
@@ -30,6 +31,10 @@ struct SimulationConfig {
   double dt_initial = 0;                    // 0 = from the Courant limit
   double dt_min = 0;                        // a step below this stops the run; 0 = 1e-12 * end_time
   std::int64_t max_steps = 10000000;
+  // Velocity damping for relaxing initial conditions: while t < damping_end,
+  // every step multiplies v by exp(-dt / damping_time). 0 = off.
+  double damping_time = 0;                  // [s]
+  double damping_end = 0;                   // [s]
 };
 
 struct ArtificialViscosity {
@@ -42,15 +47,53 @@ struct ArtificialConductivity {
   double alpha_u = 1.0;  // Price (2008)
 };
 
+// Murnaghan EOS (murnaghan = { rho0, K0, n }); docs/scene.md.
+struct MurnaghanConfig {
+  double rho0 = 0;  // [kg/m^3] reference density (> 0)
+  double K0 = 0;    // [Pa] zero-pressure bulk modulus (> 0)
+  double n = 0;     // pressure derivative of the bulk modulus (> 0)
+};
+
+// Tillotson EOS (tillotson = { rho0, A, B, E0, E_iv, E_cv, a, b, alpha, beta }).
+struct TillotsonConfig {
+  double rho0 = 0;   // [kg/m^3] (> 0)
+  double A = 0;      // [Pa] bulk modulus (> 0)
+  double B = 0;      // [Pa] (>= 0)
+  double E0 = 0;     // [J/kg] (> 0)
+  double E_iv = 0;   // [J/kg] incipient vaporisation (> 0)
+  double E_cv = 0;   // [J/kg] complete vaporisation (> E_iv)
+  double a = 0;      // (>= 0)
+  double b = 0;      // (>= 0)
+  double alpha = 0;  // (>= 0)
+  double beta = 0;   // (>= 0)
+};
+
+// Add-on options of an equation of state, each off unless set.
+struct EosOptionsConfig {
+  double rho_limit = 0;        // tension cut-off below rho/rho0 = rho_limit; 0 = off
+  bool p_min_enabled = false;  // minimum pressure on?
+  double p_min = 0;            // [Pa]
+  double cs_min = 0;           // [m/s] minimum sound speed; 0 = off
+};
+
 struct MaterialConfig {
   std::string name;     // the key under [materials]
+  std::string library;       // library material name or file as written ("" = inline)
+  std::string library_file;  // the library file it was loaded from
+  std::string source;        // library files: where the parameters come from
+  std::string units;         // library files: "SI" or "dimensionless"
   EosType eos = EosType::IdealGas;
   double gamma = 0;     // ideal gas adiabatic index (> 1)
+  MurnaghanConfig murnaghan;
+  TillotsonConfig tillotson;
+  EosOptionsConfig eos_options;
   ArtificialViscosity viscosity;
   ArtificialConductivity conductivity;
 };
 
-enum class BodyShape : int { Box = 0 };
+// Box: min..max. Sphere (a disk in 2-D, a segment in 1-D): center, radius.
+// Ring (2-D annulus, 3-D spherical shell): center, inner_radius..radius.
+enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3 };
 enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
 
 struct BodyConfig {
@@ -64,6 +107,17 @@ struct BodyConfig {
   double pressure = -1;      // [Pa]  one of pressure / internal_energy
   double internal_energy = -1;  // [J/kg]
   std::array<double, 3> velocity{};  // [m/s]
+  // shape = "polytrope" (3-D only): a self-gravitating polytrope in
+  // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
+  // solution; K follows from radius, mass, n and gravity.G. The parser
+  // fills min/max with centre -/+ radius; spacing, density, pressure and
+  // internal_energy are unused.
+  std::array<double, 3> center{};  // [m] (polytrope, sphere, ring)
+  double radius = 0;               // [m] outer radius R (> 0) (polytrope, sphere, ring)
+  double inner_radius = 0;         // [m] (ring)
+  double mass = 0;                 // [kg] total mass M (> 0)
+  double polytropic_index = 1;     // n, 0 < n < 5
+  std::int64_t particles = 0;      // approximate number of particles
 };
 
 struct DomainConfig {
@@ -78,6 +132,21 @@ struct OutputConfig {
   bool snapshots = true;
 };
 
+// [gravity]: self-gravity (3-D, open boundaries only); docs/scene.md.
+enum class GravityMode : int { Off = 0, Direct = 1, BarnesHut = 2 };
+enum class GravitySoftening : int { SmoothingLength = 0, Fixed = 1 };
+
+struct GravityConfig {
+  GravityMode mode = GravityMode::Off;
+  double theta = 0.5;                                  // Barnes-Hut opening angle, [0, 1]
+  MultipoleOrder order = MultipoleOrder::Quadrupole;   // Barnes-Hut expansion order
+  double G = kGravitationalConstantSI;                 // [m^3 kg^-1 s^-2]
+  GravitySoftening softening = GravitySoftening::SmoothingLength;  // eps = h, or a fixed length
+  double softening_length = 0;                         // [m] (softening = a number)
+  int leaf_size = 8;                                   // particles per tree leaf (tuning)
+  int group_size = 32;                                 // particles sharing one tree walk (tuning)
+};
+
 struct Scene {
   std::string file;     // where it came from (for messages)
   std::string text;     // full scene text after --set overrides (stored in snapshots)
@@ -86,6 +155,7 @@ struct Scene {
   std::vector<BodyConfig> bodies;
   DomainConfig domain;
   OutputConfig output;
+  GravityConfig gravity;
 };
 
 }  // namespace rubble

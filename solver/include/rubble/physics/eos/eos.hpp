@@ -1,42 +1,192 @@
 #pragma once
 // One entry point for every equation of state: the material's EOS is chosen
 // at run time from the scene and dispatched here. Each EOS returns the
-// pressure and the squared sound speed from (rho, u).
+// pressure and the squared sound speed from (rho, u), and the regime.
+//
+// eos_evaluate_raw: the equation of state itself (ideal_gas.hpp,
+//   murnaghan.hpp, tillotson.hpp), the thermodynamic p and c².
+// eos_evaluate: the raw values with the material's add-ons, in this order
+//   (docs/physics.md, "Equation of state"):
+//   1. tension cut-off (EosLimits::rho_limit > 0; Murnaghan and Tillotson):
+//      for η = ρ/ρ0 < rho_limit, Murnaghan p = 0; Tillotson drops the cold
+//      (compressed-formula) share, p = w_e p_e (0 in cold states, p_e
+//      unchanged in hot ones). c² is not changed.
+//   2. minimum pressure (p_min_enabled): p = max(p, p_min).
+//   3. Tillotson sound-speed floor, always on: c² = max(c², A/ρ0), the
+//      uncompressed bulk value (as Reinhardt & Stadel 2017's Tillotson
+//      library and SWIFT's planetary EOS, Kegerreis et al. 2019). It acts
+//      only for η < 1 (for η ≥ 1, c² ≥ A/ρ0 already) and covers the cold
+//      expanded states where c² ≤ 0.
+//   4. minimum sound speed (cs_min > 0): c² = max(c², cs_min²).
+// Options 1, 2 and 4 are off unless the material turns them on.
 #include "rubble/core/hd.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/physics/eos/ideal_gas.hpp"
+#include "rubble/physics/eos/murnaghan.hpp"
+#include "rubble/physics/eos/tillotson.hpp"
 
 namespace rubble {
 
-enum class EosKind : int { IdealGas = 0 };
+enum class EosKind : int { IdealGas = 0, Murnaghan = 1, Tillotson = 2 };
+
+// The add-on options of a material; every one off by default.
+struct EosLimits {
+  Real rho_limit = 0;          // tension cut-off below η = rho_limit; 0 = off (Murnaghan, Tillotson)
+  Real p_min = 0;              // minimum pressure, used when p_min_enabled
+  bool p_min_enabled = false;  // (p_min = 0 is a meaningful setting: no tension)
+  Real cs_min = 0;             // minimum sound speed; 0 = off
+};
 
 // Plain-old-data so it can be copied to a device as it is.
 struct EosParams {
   EosKind kind = EosKind::IdealGas;
   IdealGasParams ideal_gas{Real(1.4)};
+  MurnaghanParams murnaghan{Real(1), Real(1), Real(1)};
+  TillotsonParams tillotson{Real(1), Real(1), Real(0), Real(1), Real(1), Real(2), Real(0.5), Real(1), Real(5), Real(5)};
+  EosLimits limits{};
+};
+
+enum class EosRegime : int {
+  IdealGas = 0,
+  Murnaghan = 1,
+  TillotsonCompressed = 2,
+  TillotsonExpandedCold = 3,
+  TillotsonPartialVaporisation = 4,
+  TillotsonExpandedHot = 5,
+};
+
+// Bits of EosState::limited: which add-on changed the raw value.
+enum EosLimitFlags : unsigned {
+  kEosTensionCutOff = 1u,    // p changed by the tension cut-off
+  kEosPressureFloor = 2u,    // p raised to p_min
+  kEosSoundSpeedFloor = 4u,  // c² raised to the Tillotson floor A/ρ0
+  kEosMinSoundSpeed = 8u,    // c² raised to cs_min²
 };
 
 struct EosState {
-  Real p;   // pressure
-  Real c2;  // squared sound speed
+  Real p;                               // pressure
+  Real c2;                              // squared sound speed
+  EosRegime regime = EosRegime::IdealGas;
+  unsigned limited = 0;                 // EosLimitFlags that acted
 };
 
-RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
-  switch (e.kind) {
-    case EosKind::IdealGas:
-    default:
-      return {ideal_gas_pressure(e.ideal_gas, rho, u), ideal_gas_sound_speed2(e.ideal_gas, rho, u)};
-  }
+// The always-on floor of c²: A/ρ0 for Tillotson, none (0) otherwise.
+RUBBLE_HD_INLINE Real eos_c2_floor(const EosParams& e) {
+  return e.kind == EosKind::Tillotson ? e.tillotson.A / e.tillotson.rho0 : Real(0);
 }
 
-// The specific internal energy that gives pressure p at density rho, used
-// to set initial conditions given in pressure.
+RUBBLE_HD_INLINE EosState eos_evaluate_raw(const EosParams& e, Real rho, Real u) {
+  EosState s;
+  switch (e.kind) {
+    case EosKind::Murnaghan:
+      s.p = murnaghan_pressure(e.murnaghan, rho);
+      s.c2 = murnaghan_sound_speed2(e.murnaghan, rho);
+      s.regime = EosRegime::Murnaghan;
+      break;
+    case EosKind::Tillotson: {
+      const TillotsonState t = tillotson_evaluate(e.tillotson, rho, u);
+      s.p = t.p;
+      s.c2 = t.c2;
+      s.regime = static_cast<EosRegime>(static_cast<int>(EosRegime::TillotsonCompressed) + static_cast<int>(t.regime));
+      break;
+    }
+    case EosKind::IdealGas:
+    default:
+      s.p = ideal_gas_pressure(e.ideal_gas, rho, u);
+      s.c2 = ideal_gas_sound_speed2(e.ideal_gas, rho, u);
+      s.regime = EosRegime::IdealGas;
+      break;
+  }
+  return s;
+}
+
+RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
+  EosState s = eos_evaluate_raw(e, rho, u);
+  const EosLimits& l = e.limits;
+  // 1. tension cut-off
+  if (l.rho_limit > Real(0)) {
+    if (e.kind == EosKind::Murnaghan && rho < l.rho_limit * e.murnaghan.rho0) {
+      if (s.p != Real(0)) s.limited |= kEosTensionCutOff;
+      s.p = Real(0);
+    } else if (e.kind == EosKind::Tillotson && rho < l.rho_limit * e.tillotson.rho0) {
+      const TillotsonState t = tillotson_evaluate(e.tillotson, rho, u);
+      if (t.p_cold != Real(0)) s.limited |= kEosTensionCutOff;
+      s.p = t.p_hot;
+    }
+  }
+  // 2. minimum pressure
+  if (l.p_min_enabled && s.p < l.p_min) {
+    s.p = l.p_min;
+    s.limited |= kEosPressureFloor;
+  }
+  // 3. the Tillotson floor
+  const Real floor = eos_c2_floor(e);
+  if (s.c2 < floor) {
+    s.c2 = floor;
+    s.limited |= kEosSoundSpeedFloor;
+  }
+  // 4. minimum sound speed
+  if (s.c2 < l.cs_min * l.cs_min) {
+    s.c2 = l.cs_min * l.cs_min;
+    s.limited |= kEosMinSoundSpeed;
+  }
+  return s;
+}
+
+// The specific internal energy u ≥ 0 that gives pressure p at density rho
+// (with the material's add-ons), for initial conditions given in pressure;
+// −1 when there is none.
+//   ideal gas: u = p / ((γ − 1) ρ).
+//   Murnaghan: isothermal, p depends on ρ alone: u = 0 when p equals p(ρ) to
+//     1e-12 K0, otherwise −1.
+//   Tillotson: bisection on [0, u_hi], u_hi doubled from E_cv until
+//     p(ρ, u_hi) ≥ p; −1 when p(ρ, 0) > p (a lower pressure would need
+//     u < 0) or p is out of reach. Where p(u) is not monotonic (partial
+//     vaporisation can bend it) this is one root of the bracket.
 RUBBLE_HD_INLINE Real eos_internal_energy_from_pressure(const EosParams& e, Real rho, Real p) {
   switch (e.kind) {
+    case EosKind::Murnaghan: {
+      const Real pm = eos_evaluate(e, rho, Real(0)).p;
+      const Real diff = pm > p ? pm - p : p - pm;
+      return diff <= Real(1e-12) * e.murnaghan.K0 ? Real(0) : Real(-1);
+    }
+    case EosKind::Tillotson: {
+      Real lo = 0, hi = e.tillotson.E_cv;
+      const Real p_lo = eos_evaluate(e, rho, lo).p;
+      if (p_lo == p) return Real(0);
+      if (p_lo > p) return Real(-1);
+      int doublings = 0;
+      while (eos_evaluate(e, rho, hi).p < p) {
+        lo = hi;
+        hi *= Real(2);
+        if (++doublings > 200) return Real(-1);
+      }
+      // p(lo) < p <= p(hi): halve until the bracket stops shrinking
+      for (int it = 0; it < 200; ++it) {
+        const Real mid = Real(0.5) * (lo + hi);
+        if (!(mid > lo && mid < hi)) break;
+        if (eos_evaluate(e, rho, mid).p < p) lo = mid;
+        else hi = mid;
+      }
+      return hi;
+    }
     case EosKind::IdealGas:
     default:
       return p / ((e.ideal_gas.gamma - Real(1)) * rho);
   }
+}
+
+// Host helper: the regime's name as `rubble eos` prints it.
+inline const char* eos_regime_name(EosRegime r) {
+  switch (r) {
+    case EosRegime::IdealGas: return "ideal_gas";
+    case EosRegime::Murnaghan: return "murnaghan";
+    case EosRegime::TillotsonCompressed: return tillotson_regime_name(TillotsonRegime::Compressed);
+    case EosRegime::TillotsonExpandedCold: return tillotson_regime_name(TillotsonRegime::ExpandedCold);
+    case EosRegime::TillotsonPartialVaporisation: return tillotson_regime_name(TillotsonRegime::PartialVaporisation);
+    case EosRegime::TillotsonExpandedHot: return tillotson_regime_name(TillotsonRegime::ExpandedHot);
+  }
+  return "unknown";
 }
 
 }  // namespace rubble
