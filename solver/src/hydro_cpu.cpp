@@ -6,7 +6,11 @@
 
 #include "rubble/core/error.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
+#include "rubble/physics/artificial_stress.hpp"
 #include "rubble/physics/hydro.hpp"
+#include "rubble/physics/jaumann_rate.hpp"
+#include "rubble/physics/kernel_gradient_correction.hpp"
+#include "rubble/physics/solid.hpp"
 #include "rubble/physics/kernels.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/timestep.hpp"
@@ -21,6 +25,19 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     p.eos = eos_params_from_material(m);  // EOS and its add-on options (issue #3)
     p.av = {Real(m.viscosity.alpha), Real(m.viscosity.beta)};
     p.alpha_u = m.conductivity.enabled ? Real(m.conductivity.alpha_u) : Real(0);
+    p.shear_modulus = Real(m.shear_modulus);
+    const bool as = m.artificial_stress.enabled && m.shear_modulus > 0;
+    p.as_epsilon = as ? Real(m.artificial_stress.epsilon) : Real(0);
+    p.as_exponent = as ? Real(m.artificial_stress.n) : Real(0);
+    // dp: the lattice spacing of the first body of this material (the
+    // artificial stress's W(dp); Gray, Monaghan & Swift 2001)
+    p.dp = 0;
+    const int id = static_cast<int>(out.size());
+    for (const auto& b : scene.bodies)
+      if (b.material_id == id && b.spacing > 0) {
+        p.dp = Real(b.spacing);
+        break;
+      }
     out.push_back(p);
   }
   return out;
@@ -40,6 +57,17 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
       gravity_(scene.gravity, scene.simulation.kernel) {
   if (gravity_.enabled() && (D != 3 || ps_.a_grav.size() != ps_.n || ps_.phi.size() != ps_.n))
     throw RunError("self-gravity needs a 3-D scene with the a_grav and phi fields allocated");
+  for (const MaterialParams& m : materials_) {
+    solid_ = solid_ || m.shear_modulus > Real(0);
+    artificial_stress_ = artificial_stress_ || m.as_exponent > Real(0);
+  }
+  if (solid_) {
+    if (summation_ || ps_.S.size() != ps_.n || ps_.dSdt.size() != ps_.n)
+      throw RunError("solids need continuity density with the S and dSdt fields allocated");
+    kernel_correction_ = scene.simulation.kernel_correction;
+    grad_v_.assign(ps_.n, Mat<D>::zero());
+    if (artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
+  }
 }
 
 template <int D>
@@ -175,6 +203,88 @@ void HydroCpu<D>::rates() {
   }
 }
 
+// Feature set Solid (any material with a shear modulus; continuity density).
+// Pass 1, per particle: the velocity gradient L_a (optionally with the
+// kernel-gradient correction), the Jaumann stress rate and the artificial
+// stress tensor R_a. Pass 2, per pair: solid_pair (full stress).
+template <int D>
+void HydroCpu<D>::solid_rates() {
+  const std::size_t n = ps_.n;
+  std::int64_t fallbacks = 0;
+  constexpr Real kMinDet = Real(1e-3);  // kernel_gradient_correction.hpp
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : fallbacks)
+  for (std::size_t a = 0; a < n; ++a) {
+    Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
+    for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+      const std::uint32_t b = nbrs_.index[k];
+      const Vec<D> dx = domain_.separation(ps_.x[a], ps_.x[b]);
+      const Real r = norm(dx);
+      if (r <= Real(0) || (r >= ps_.h[a] && r >= ps_.h[b])) continue;
+      const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel_, dx, ps_.h[a]) + kernel_grad<D>(kernel_, dx, ps_.h[b]));
+      L += velocity_gradient_pair_term<D>(ps_.m[b], ps_.rho[b], ps_.v[b] - ps_.v[a], g);
+      if (kernel_correction_) M += correction_pair_term<D>(ps_.m[b], ps_.rho[b], -dx, g);
+    }
+    if (kernel_correction_) {
+      Mat<D> C;
+      if (!correction_matrix<D>(M, kMinDet, C)) ++fallbacks;
+      L = L * C;  // M is symmetric for radial kernels, so C^T = C
+    }
+    grad_v_[a] = L;
+    const MaterialParams& mat = materials_[ps_.material_id[a]];
+    ps_.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(ps_.S[a], L, mat.shear_modulus)
+                                              : Mat<D>::zero();
+    if (artificial_stress_) {
+      Mat<D> sigma = ps_.S[a];
+      for (int i = 0; i < D; ++i) sigma.m[i][i] -= ps_.p[a];
+      art_R_[a] = mat.as_exponent > Real(0) ? artificial_stress_tensor<D>(sigma, ps_.rho[a], mat.as_epsilon)
+                                            : Mat<D>::zero();
+    }
+  }
+  fallbacks_last_ = fallbacks;
+  fallbacks_total_ += fallbacks;
+
+  auto particle = [&](std::size_t i) {
+    const MaterialParams& mat = materials_[ps_.material_id[i]];
+    return SolidParticle<D>{ps_.x[i],   ps_.v[i],  ps_.m[i],  ps_.rho[i],
+                            ps_.p[i],   ps_.h[i],  ps_.cs[i], ps_.S[i],
+                            artificial_stress_ ? art_R_[i] : Mat<D>::zero(),
+                            mat.av,     mat.dp,    mat.as_exponent};
+  };
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t a = 0; a < n; ++a) {
+    const SolidParticle<D> pa = particle(a);
+    Vec<D> dvdt = Vec<D>::zero();
+    Real dudt = 0, drhodt = 0, mu_max = 0;
+    for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+      const std::uint32_t b = nbrs_.index[k];
+      const SolidPairRates<D> r = solid_pair<D>(kernel_, pa, particle(b), domain_.separation(ps_.x[a], ps_.x[b]));
+      dvdt += r.dvdt;
+      dudt += r.dudt;
+      drhodt += r.drhodt;
+      mu_max = std::max(mu_max, r.mu);
+    }
+    ps_.dvdt[a] = dvdt;
+    ps_.dudt[a] = dudt;
+    ps_.drhodt[a] = drhodt;
+    ps_.mu_max[a] = mu_max;
+  }
+}
+
+// Boundary particles are not integrated: their rates are zero, so they keep
+// their velocity (0 when fixed) and state, and move with it.
+template <int D>
+void HydroCpu<D>::hold_boundaries() {
+  const std::size_t n = ps_.n;
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!ps_.boundary[a]) continue;
+    ps_.dvdt[a] = Vec<D>::zero();
+    ps_.dudt[a] = 0;
+    if (!ps_.drhodt.empty()) ps_.drhodt[a] = 0;
+    if (!ps_.dSdt.empty()) ps_.dSdt[a] = Mat<D>::zero();
+  }
+}
+
 // Self-gravity (3-D only): a_grav and phi from direct summation or the
 // octree, softened with h (or a fixed length); a_grav is added to dv/dt.
 template <int D>
@@ -192,8 +302,10 @@ void HydroCpu<D>::evaluate() {
   if (summation_) summation_density_and_h();
   else h_from_continuity_density();
   equation_of_state();
-  rates();
+  if (solid_) solid_rates();  // the feature set is fixed for the run
+  else rates();
   if (gravity_.enabled()) self_gravity();
+  if (!ps_.boundary.empty()) hold_boundaries();
 }
 
 template <int D>
@@ -204,7 +316,10 @@ Real HydroCpu<D>::dt_limit() const {
   for (std::size_t a = 0; a < n; ++a) {
     const MaterialParams& mat = materials_[ps_.material_id[a]];
     const Real hM = monaghan_h(ps_.h[a]);
-    const Real dt_c = courant_dt(courant_, hM, ps_.cs[a], mat.av.alpha, mat.av.beta, ps_.mu_max[a]);
+    // solids: the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho))
+    const Real c = mat.shear_modulus > Real(0) ? elastic_signal_speed(ps_.cs[a], mat.shear_modulus, ps_.rho[a])
+                                               : ps_.cs[a];
+    const Real dt_c = courant_dt(courant_, hM, c, mat.av.alpha, mat.av.beta, ps_.mu_max[a]);
     const Real dt_f = force_dt(force_factor_, hM, norm(ps_.dvdt[a]));
     dt = std::min(dt, std::min(dt_c, dt_f));
   }

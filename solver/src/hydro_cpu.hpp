@@ -21,6 +21,10 @@ struct MaterialParams {
   EosParams eos;
   ViscosityParams av;
   Real alpha_u;  // artificial conductivity (0 = off)
+  Real shear_modulus;  // mu (0 = no strength)
+  Real as_epsilon;     // artificial stress epsilon (0 = off)
+  Real as_exponent;    // artificial stress n (0 = off)
+  Real dp;             // initial particle spacing of the material's bodies
 };
 
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene);
@@ -41,13 +45,22 @@ class HydroCpu {
   const Box<D>& domain() const { return domain_; }
   bool summation_density() const { return summation_; }
   std::int64_t neighbor_rebuilds() const { return rebuilds_; }
+  // Solids: does the run evolve the deviatoric stress (the Solid feature set)?
+  bool solid() const { return solid_; }
+  // Kernel-gradient correction: particle evaluations where the correction
+  // matrix was ill-conditioned and the identity was used instead (summed
+  // over all evaluations), and the same for the last evaluation.
+  std::int64_t correction_fallbacks() const { return fallbacks_total_; }
+  std::int64_t correction_fallbacks_last() const { return fallbacks_last_; }
 
  private:
   void build_neighbors(const std::vector<Real>& search_radius);
   void summation_density_and_h();
   void h_from_continuity_density();
   void equation_of_state();
-  void rates();
+  void rates();        // feature set Hydro: pressure, viscosity, conductivity
+  void solid_rates();  // feature set Solid: full stress, Jaumann rate, artificial stress
+  void hold_boundaries();
   void self_gravity();
 
   ParticleStore<D>& ps_;
@@ -62,6 +75,12 @@ class HydroCpu {
   std::vector<Real> search_radius_;
   std::int64_t rebuilds_ = 0;
   SelfGravity gravity_;  // off unless the scene's [gravity] turns it on (3-D)
+  bool solid_ = false;
+  bool kernel_correction_ = false;
+  bool artificial_stress_ = false;
+  std::vector<Mat<D>> grad_v_;  // solids: velocity gradient (scratch)
+  std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
+  std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
 };
 
 }  // namespace rubble

@@ -64,15 +64,7 @@ class OutputWriter {
     char name[512];
     std::snprintf(name, sizeof name, "%s.%04d.h5", scene_.output.name.c_str(), count_++);
     write_file(ps, t, step, name);
-    std::vector<std::pair<std::string, int>> fields;
-    for (const auto& f : field_table<D>()) {
-      if (!f.snapshot) continue;
-      std::visit([&](auto member) {
-        using Elem = typename std::remove_reference_t<decltype(ps.*member)>::value_type;
-        if (!(ps.*member).empty()) fields.emplace_back(std::string(f.name), std::is_same_v<Elem, Vec<D>> ? D : 1);
-      }, f.member);
-    }
-    xdmf_->add_snapshot(name, t, ps.n, fields);
+    xdmf_->add_snapshot(name, t, ps.n, snapshot_fields<D>(ps));
     xdmf_->write();
   }
 
@@ -120,6 +112,8 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   needs.summation_density = sim.density == DensityForm::Summation;
   needs.continuity_density = sim.density == DensityForm::Continuity;
   needs.gravity = scene.gravity.mode != GravityMode::Off;
+  for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
+  for (const BodyConfig& b : scene.bodies) needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);
 

@@ -365,7 +365,8 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end"});
+              "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
+              "kernel_correction"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -426,6 +427,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
     s.damping_time = *damping_time;
     s.damping_end = *damping_end;
   }
+  if (auto b = boolean(*t, "kernel_correction", p)) s.kernel_correction = *b;
 }
 
 // ---- materials (docs/scene.md "Materials"; issue #3) -------------------------
@@ -593,7 +595,8 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
                  {{"ideal_gas", EosType::IdealGas}, {"murnaghan", EosType::Murnaghan}, {"tillotson", EosType::Tillotson}});
   // (rho_limit is known to every EOS so that the ideal gas can say why it
   // has no tension cut-off)
-  std::vector<std::string> known = {"eos", "viscosity", "conductivity", "rho_limit", "p_min", "cs_min"};
+  std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
+                                    "p_min",  "cs_min",        "shear_modulus",    "artificial_stress"};
   if (m.eos == EosType::IdealGas) known.push_back("gamma");
   if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
   if (m.eos == EosType::Tillotson) known.push_back("tillotson");
@@ -641,6 +644,27 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
       require(*x >= 0, *c, "alpha_u", cp, *x, ">= 0");
       m.conductivity.alpha_u = *x;
     }
+  }
+  // Strength (issue #4): a shear modulus makes the material an elastic solid.
+  if (auto x = number(t, "shear_modulus", p)) {
+    require(*x >= 0, t, "shear_modulus", p, *x, ">= 0 (0 = no strength)");
+    m.shear_modulus = *x;
+  }
+  if (const toml::table* a = table(t, "artificial_stress", p)) {
+    const std::string ap = sub(p, "artificial_stress");
+    check_keys(*a, ap, {"enabled", "epsilon", "n"});
+    m.artificial_stress.enabled = true;  // a table turns it on unless enabled = false
+    if (auto b = boolean(*a, "enabled", ap)) m.artificial_stress.enabled = *b;
+    if (auto x = number(*a, "epsilon", ap)) {
+      require(*x >= 0 && *x <= 1, *a, "epsilon", ap, *x, "in [0, 1] (typically 0.2-0.3)");
+      m.artificial_stress.epsilon = *x;
+    }
+    if (auto x = number(*a, "n", ap)) {
+      require(*x > 0 && *x <= 16, *a, "n", ap, *x, "in (0, 16] (typically 4)");
+      m.artificial_stress.n = *x;
+    }
+    if (m.artificial_stress.enabled && !(m.shear_modulus > 0))
+      fail(ap, "artificial stress acts on solids only; give the material a shear_modulus > 0 or remove it");
   }
   return m;
 }
@@ -724,15 +748,18 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   BodyConfig b;
   if (const toml::node* s = t.get("shape"); s && s->is_string() && s->as_string()->get() == "polytrope")
     return read_polytrope_body(p, t, mats);
-  check_keys(t, p,
-             {"shape", "material", "min", "max", "spacing", "lattice", "density", "pressure", "internal_energy",
-              "velocity"});
-
   const auto shape = string(t, "shape", p);
-  if (!shape) fail(p + ".shape", "missing required key (one of: box, polytrope)");
-  if (*shape != "box")
-    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, polytrope", t.get("shape"));
-  b.shape = BodyShape::Box;
+  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polytrope)");
+  if (*shape != "box" && *shape != "sphere" && *shape != "ring")
+    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polytrope", t.get("shape"));
+  b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
+  const bool round = b.shape != BodyShape::Box;
+  std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
+                                    "velocity", "boundary"};
+  if (round) known.insert(known.end(), {"center", "radius"});
+  else known.insert(known.end(), {"min", "max"});
+  if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
+  check_keys(t, p, known);
 
   const auto material = string(t, "material", p);
   if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
@@ -749,17 +776,35 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   b.material = *material;
   b.material_id = static_cast<int>(it - names.begin());
 
-  const auto lo = vector(t, "min", p);
-  if (!lo) fail(p + ".min", "missing required key (the box's lower corner, " + std::to_string(dim_) + " numbers [m])");
-  const auto hi = vector(t, "max", p);
-  if (!hi) fail(p + ".max", "missing required key (the box's upper corner, " + std::to_string(dim_) + " numbers [m])");
-  for (int a = 0; a < dim_; ++a)
-    if (!((*hi)[a] > (*lo)[a]))
-      fail(p + ".max",
-           "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
-           t.get("max"));
-  b.min = *lo;
-  b.max = *hi;
+  if (round) {
+    // sphere (a disk in 2-D) or ring (annulus in 2-D, shell in 3-D)
+    const auto c = vector(t, "center", p);
+    if (!c) fail(p + ".center", "missing required key (the centre, " + std::to_string(dim_) + " numbers [m])");
+    b.center = *c;
+    b.radius = required_number(t, "radius", p, "the outer radius [m], > 0");
+    require(b.radius > 0, t, "radius", p, b.radius, "> 0");
+    if (b.shape == BodyShape::Ring) {
+      b.inner_radius = required_number(t, "inner_radius", p, "the inner radius [m], >= 0 and < radius");
+      require(b.inner_radius >= 0 && b.inner_radius < b.radius, t, "inner_radius", p, b.inner_radius,
+              ">= 0 and < radius");
+    }
+    for (int a = 0; a < 3; ++a) {
+      b.min[a] = a < dim_ ? b.center[a] - b.radius : 0;
+      b.max[a] = a < dim_ ? b.center[a] + b.radius : 0;
+    }
+  } else {
+    const auto lo = vector(t, "min", p);
+    if (!lo) fail(p + ".min", "missing required key (the box's lower corner, " + std::to_string(dim_) + " numbers [m])");
+    const auto hi = vector(t, "max", p);
+    if (!hi) fail(p + ".max", "missing required key (the box's upper corner, " + std::to_string(dim_) + " numbers [m])");
+    for (int a = 0; a < dim_; ++a)
+      if (!((*hi)[a] > (*lo)[a]))
+        fail(p + ".max",
+             "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
+             t.get("max"));
+    b.min = *lo;
+    b.max = *hi;
+  }
 
   b.spacing = required_number(t, "spacing", p, "the lattice spacing [m], > 0");
   require(b.spacing > 0, t, "spacing", p, b.spacing, "> 0");
@@ -795,6 +840,13 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   }
 
   if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  b.boundary = choice(t, "boundary", p, BoundaryKind::None,
+                      {{"none", BoundaryKind::None}, {"fixed", BoundaryKind::Fixed}, {"moving", BoundaryKind::Moving}});
+  if (b.boundary == BoundaryKind::Fixed)
+    for (int a = 0; a < dim_; ++a)
+      if (b.velocity[a] != 0)
+        fail(p + ".velocity", "a boundary = \"fixed\" body is at rest; use boundary = \"moving\" to prescribe a velocity",
+             t.get("velocity"));
   return b;
 }
 
@@ -990,6 +1042,20 @@ Scene SceneReader::read(const toml::table& root) {
 
   if (const toml::table* d = table(root, "domain", "")) read_domain(*d, scene.domain);
   if (const toml::table* o = table(root, "output", "")) read_output(*o, scene.output);
+
+  // Solids (a material with a shear modulus) evolve the density with the
+  // continuity equation: summation underestimates it at free surfaces.
+  // Without simulation.density, a scene with a solid gets continuity.
+  const toml::table* sim_table = table(root, "simulation", "");
+  const bool density_given = sim_table && sim_table->contains("density");
+  for (const MaterialConfig& m : scene.materials) {
+    if (!(m.shear_modulus > 0) || scene.simulation.density == DensityForm::Continuity) continue;
+    if (density_given)
+      fail("simulation.density",
+           "material '" + m.name + "' is a solid (shear_modulus > 0), which needs density = \"continuity\"",
+           sim_table->get("density"));
+    scene.simulation.density = DensityForm::Continuity;
+  }
 
   // Self-gravity has no periodic images (no Ewald sums): open boundaries only.
   if (scene.gravity.mode != GravityMode::Off)

@@ -111,6 +111,20 @@ struct Layout<Vec<D>> {
   static constexpr bool vector = true;
   static_assert(sizeof(Vec<D>) == D * sizeof(Real), "Vec<D> must be D packed Reals");
 };
+// A D x D tensor (the deviatoric stress S): dataset N x D x D.
+template <int D>
+struct Layout<Mat<D>> {
+  using Scalar = Real;
+  static constexpr int components = D * D;
+  static constexpr bool vector = true;
+  static_assert(sizeof(Mat<D>) == D * D * sizeof(Real), "Mat<D> must be D*D packed Reals");
+};
+template <class T>
+struct IsTensor : std::false_type {};
+template <int D>
+struct IsTensor<Mat<D>> : std::true_type {
+  static constexpr int dim = D;
+};
 
 // HDF5 memory type of a scalar; also the file type (native Real, int32).
 template <class S>
@@ -190,8 +204,12 @@ void write_dataset(hid_t h5file, const std::string& file, const std::string& nam
                    const std::vector<T>& data) {
   using L = Layout<T>;
   const std::string where = "'" + name + "'";
-  const hsize_t dims[2] = {data.size(), hsize_t(L::components)};
-  const int rank = L::vector ? 2 : 1;
+  hsize_t dims[3] = {data.size(), hsize_t(L::components), 1};
+  int rank = L::vector ? 2 : 1;
+  if constexpr (IsTensor<T>::value) {  // N x D x D
+    dims[1] = dims[2] = hsize_t(IsTensor<T>::dim);
+    rank = 3;
+  }
   const hid_t type = native_type<typename L::Scalar>();
   Handle space(H5Screate_simple(rank, dims, nullptr), H5Sclose, file, "H5Screate_simple(" + where + ")");
   Handle dset(H5Dcreate2(h5file, name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
@@ -212,13 +230,14 @@ void read_dataset(hid_t h5file, const std::string& file, const std::string& name
   Handle space(H5Dget_space(dset.get()), H5Sclose, file, "H5Dget_space(" + where + ")");
   const int rank = H5Sget_simple_extent_ndims(space.get());
   if (rank < 0) fail(file, "H5Sget_simple_extent_ndims(" + where + ")");
-  const int want_rank = L::vector ? 2 : 1;
-  hsize_t dims[2] = {0, 0};
+  const int want_rank = IsTensor<T>::value ? 3 : L::vector ? 2 : 1;
+  hsize_t dims[3] = {0, 0, 0};
   if (rank != want_rank) {
     fail(file, "reading " + where,
          "dataset has rank " + std::to_string(rank) + ", expected " + std::to_string(want_rank));
   }
   check(H5Sget_simple_extent_dims(space.get(), dims, nullptr), file, "H5Sget_simple_extent_dims(" + where + ")");
+  if (IsTensor<T>::value) dims[1] *= dims[2];
   if (L::vector && dims[1] != hsize_t(L::components)) {
     fail(file, "reading " + where,
          "dataset has " + std::to_string(dims[1]) + " components, expected " + std::to_string(L::components));

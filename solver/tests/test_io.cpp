@@ -64,12 +64,16 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-// Every snapshot field allocated, plus omega (allocated, not a snapshot field).
+// Every snapshot field allocated, plus omega and phi (allocated, not
+// snapshot fields).
 template <int D>
 ParticleStore<D> make_store(std::size_t n) {
   ParticleStore<D> ps;
   FieldNeeds needs;
   needs.summation_density = true;
+  needs.gravity = true;  // a_grav (a snapshot field) and phi
+  needs.solid = true;     // S (a snapshot field) and dSdt
+  needs.boundary = true;  // boundary flags
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -85,6 +89,9 @@ ParticleStore<D> make_store(std::size_t n) {
     ps.cs[i] = 300 + Real(i);
     ps.material_id[i] = static_cast<std::int32_t>(i % 3);
     ps.omega[i] = Real(0.9);
+    for (int a = 0; a < D; ++a)
+      for (int b = 0; b < D; ++b) ps.S[i].m[a][b] = Real(0.3) * Real(i) + Real(a) - Real(b) / Real(3);
+    ps.boundary[i] = static_cast<std::int32_t>(i % 2);
   }
   return ps;
 }
@@ -204,14 +211,19 @@ TYPED_TEST(SnapshotTest, FileLayoutAndAttributes) {
     const hid_t space = H5Dget_space(dset);
     hsize_t dims[3] = {0, 0, 0};
     const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+    // N x D x D for tensors (S).
     const bool vector = std::holds_alternative<std::vector<Vec<D>> ParticleStore<D>::*>(f.member);
-    EXPECT_EQ(rank, vector ? 2 : 1) << name;
+    const bool tensor = std::holds_alternative<std::vector<Mat<D>> ParticleStore<D>::*>(f.member);
+    EXPECT_EQ(rank, tensor ? 3 : vector ? 2 : 1) << name;
     EXPECT_EQ(dims[0], ps.n) << name;
-    if (vector) {
+    if (vector || tensor) {
       EXPECT_EQ(dims[1], hsize_t(D)) << name;
     }
+    if (tensor) {
+      EXPECT_EQ(dims[2], hsize_t(D)) << name;
+    }
     const hid_t type = H5Dget_type(dset);
-    if (name == "material_id") {
+    if (name == "material_id" || name == "boundary") {
       EXPECT_GT(H5Tequal(type, H5T_NATIVE_INT32), 0);
     } else {
       EXPECT_EQ(H5Tget_size(type), sizeof(Real)) << name;
@@ -231,6 +243,9 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.p.clear();  // e.g. a scene that never needs these
   ps.cs.clear();
   ps.h.clear();
+  ps.a_grav.clear();  // no self-gravity
+  ps.S.clear();       // no solids
+  ps.boundary.clear();  // no boundary bodies
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;

@@ -6,12 +6,15 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "rubble/physics/artificial_stress.hpp"
 #include "rubble/physics/jaumann_rate.hpp"
 #include "rubble/physics/kernel_gradient_correction.hpp"
 #include "rubble/physics/kernels.hpp"
+#include "rubble/physics/hydro.hpp"
+#include "rubble/physics/solid.hpp"
 #include "rubble/physics/symmetric_eigen.hpp"
 
 using namespace rubble;
@@ -239,4 +242,71 @@ TEST(KernelGradientCorrection, IllConditionedFallsBackToIdentity) {
   Mat<2> C;
   EXPECT_FALSE(correction_matrix<2>(sum, 1e-3, C));
   EXPECT_LT(max_abs_diff(C, Mat<2>::identity()), 1e-15);
+}
+
+// Issue #4 item 4d: the solid pair force (full stress, artificial stress,
+// viscosity) conserves linear momentum to round-off, and du/dt is its work,
+// so kinetic + internal energy does not change either.
+template <int D>
+void check_solid_pair_conservation() {
+  std::mt19937 gen(42 + D);
+  std::uniform_real_distribution<double> U(0, 1), S(-1, 1);
+  const int n = 40;
+  std::vector<SolidParticle<D>> ps(n);
+  for (auto& q : ps) {
+    for (int k = 0; k < D; ++k) {
+      q.x[k] = U(gen);
+      q.v[k] = S(gen);
+    }
+    q.m = 0.5 + U(gen);
+    q.rho = 0.8 + 0.4 * U(gen);
+    q.p = S(gen);
+    q.h = 0.45 + 0.1 * U(gen);
+    q.cs = 1 + U(gen);
+    q.S = random_symmetric<D>(gen);
+    Mat<D> sigma = q.S;
+    for (int k = 0; k < D; ++k) sigma.m[k][k] -= q.p;
+    q.R = artificial_stress_tensor<D>(sigma, q.rho, 0.3);
+    q.av = {1.0, 2.0};
+    q.dp = 0.1;
+    q.as_exponent = 4;
+  }
+  Vec<D> P = Vec<D>::zero();
+  double scale = 0, power = 0, power_scale = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      if (a == b) continue;
+      const auto r = solid_pair<D>(KernelType::CubicSpline, ps[a], ps[b], ps[a].x - ps[b].x);
+      P += ps[a].m * r.dvdt;
+      scale += ps[a].m * norm(r.dvdt);
+      power += ps[a].m * (dot(ps[a].v, r.dvdt) + r.dudt);
+      power_scale += ps[a].m * (std::fabs(dot(ps[a].v, r.dvdt)) + std::fabs(r.dudt));
+    }
+  ASSERT_GT(scale, 0.0);
+  const double eps = 100 * std::numeric_limits<Real>::epsilon();
+  EXPECT_LT(norm(P), eps * scale);
+  EXPECT_LT(std::fabs(power), eps * power_scale);
+}
+TEST(SolidPair, ConservesMomentumAndEnergy2D) { check_solid_pair_conservation<2>(); }
+TEST(SolidPair, ConservesMomentumAndEnergy3D) { check_solid_pair_conservation<3>(); }
+
+// With S = 0 and no artificial stress the solid pair is the hydro pair in
+// its continuity-density form.
+TEST(SolidPair, ReducesToHydroWithoutStress) {
+  SolidParticle<2> a{}, b{};
+  a.x = Vec<2>{{0.0, 0.0}};
+  b.x = Vec<2>{{0.3, 0.1}};
+  a.v = Vec<2>{{0.2, -0.1}};
+  b.v = Vec<2>{{-0.3, 0.05}};
+  a.m = 1; b.m = 1.2; a.rho = 1; b.rho = 1.1; a.p = 0.3; b.p = 0.1; a.h = 0.5; b.h = 0.55; a.cs = 1; b.cs = 1.1;
+  a.S = b.S = a.R = b.R = Mat<2>::zero();
+  a.av = b.av = {1.0, 2.0};
+  const HydroParticle<2> ha{a.x, a.v, a.m, a.rho, a.p, 0.0, a.h, 1.0, a.cs, a.av, 0.0};
+  const HydroParticle<2> hb{b.x, b.v, b.m, b.rho, b.p, 0.0, b.h, 1.0, b.cs, b.av, 0.0};
+  const auto s = solid_pair<2>(KernelType::CubicSpline, a, b, a.x - b.x);
+  const auto h = hydro_pair<2>(KernelType::CubicSpline, ha, hb, a.x - b.x, true);
+  for (int k = 0; k < 2; ++k) EXPECT_NEAR(s.dvdt[k], h.dvdt[k], 100 * std::numeric_limits<Real>::epsilon());
+  EXPECT_NEAR(s.dudt, h.dudt, 100 * std::numeric_limits<Real>::epsilon());
+  EXPECT_NEAR(s.drhodt, h.drhodt, 100 * std::numeric_limits<Real>::epsilon());
+  EXPECT_NEAR(s.mu, h.mu, 100 * std::numeric_limits<Real>::epsilon());
 }

@@ -42,6 +42,13 @@ struct Mat {
       for (int j = 0; j < D; ++j) m[i][j] -= o.m[i][j];
     return *this;
   }
+  // exact element-wise equality (snapshot round trips)
+  RUBBLE_HD bool operator==(const Mat& o) const {
+    for (int i = 0; i < D; ++i)
+      for (int j = 0; j < D; ++j)
+        if (m[i][j] != o.m[i][j]) return false;
+    return true;
+  }
   RUBBLE_HD Mat& operator*=(Real s) {
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) m[i][j] *= s;

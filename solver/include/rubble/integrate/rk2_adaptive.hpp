@@ -12,7 +12,8 @@
 // with scale h for positions, |v| + c_s for velocities, |u| + c_s^2 for the
 // internal energy (c_s^2 is the medium's mechanical energy scale, so a cold
 // solid with u = 0 is not held to an absolute error of zero) and rho for
-// density. A step with err > tol is
+// density, and |S| + rho c_s^2 for the deviatoric stress of solids
+// (Frobenius norms). A step with err > tol is
 // rejected and retried; the next step size is
 //   dt_new = dt * clamp(0.9 (tol/err)^(1/3), 0.2, 2),
 // never above the Courant and force limits.
@@ -35,6 +36,7 @@ template <int D, class System>
 Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol, Real dt_min) {
   const std::size_t n = ps.n;
   const bool evolve_rho = !ps.drhodt.empty();
+  const bool evolve_S = !ps.dSdt.empty();  // solids
   const ParticleStore<D> y0 = ps;  // state and k1 (its rates)
   int rejections = 0;
 
@@ -46,6 +48,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       ps.v[i] = y0.v[i] + dt * y0.dvdt[i];
       ps.u[i] = y0.u[i] + dt * y0.dudt[i];
       if (evolve_rho) ps.rho[i] = y0.rho[i] + dt * y0.drhodt[i];
+      if (evolve_S) ps.S[i] = y0.S[i] + dt * y0.dSdt[i];
     }
     sys.evaluate();
     const ParticleStore<D> y1 = ps;  // k2 = rates of y1
@@ -58,6 +61,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       ps.v[i] = y0.v[i] + q * (y0.dvdt[i] + y1.dvdt[i]);
       ps.u[i] = y0.u[i] + q * (y0.dudt[i] + y1.dudt[i]);
       if (evolve_rho) ps.rho[i] = y0.rho[i] + q * (y0.drhodt[i] + y1.drhodt[i]);
+      if (evolve_S) ps.S[i] = y0.S[i] + q * (y0.dSdt[i] + y1.dSdt[i]);
     }
     sys.evaluate();  // k3 = rates in ps
 
@@ -77,6 +81,11 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
         const Real drho = c23 * (Real(0.5) * (y0.drhodt[i] + y1.drhodt[i]) - k3.drhodt[i]);
         e = std::max(e, std::fabs(drho) / y0.rho[i]);
       }
+      if (evolve_S) {
+        const Mat<D> dS = c23 * (Real(0.5) * (y0.dSdt[i] + y1.dSdt[i]) - k3.dSdt[i]);
+        const Real scale = std::sqrt(double_dot(y0.S[i], y0.S[i])) + y0.rho[i] * y0.cs[i] * y0.cs[i] + Real(1e-300);
+        e = std::max(e, std::sqrt(double_dot(dS, dS)) / scale);
+      }
       err = std::max(err, e);
     }
 
@@ -90,6 +99,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
         ps.v[i] = y0.v[i] + h2 * (y0.dvdt[i] + y1.dvdt[i]);
         ps.u[i] = y0.u[i] + h2 * (y0.dudt[i] + y1.dudt[i]);
         if (evolve_rho) ps.rho[i] = y0.rho[i] + h2 * (y0.drhodt[i] + y1.drhodt[i]);
+        if (evolve_S) ps.S[i] = y0.S[i] + h2 * (y0.dSdt[i] + y1.dSdt[i]);
       }
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};

@@ -14,6 +14,7 @@
 #include <variant>
 #include <vector>
 
+#include "rubble/core/mat.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/core/vec.hpp"
 
@@ -25,6 +26,8 @@ struct FieldNeeds {
   bool summation_density = false;   // grad-h factor omega is stored
   bool conductivity = false;
   bool gravity = false;             // self-gravity: a_grav and phi are stored
+  bool solid = false;               // a material has strength: S and dSdt are stored
+  bool boundary = false;            // a body is made of boundary particles
 };
 
 template <int D>
@@ -57,6 +60,14 @@ struct ParticleStore {
   std::vector<Vec<D>> a_grav;  // gravitational acceleration [m/s^2] (included in dvdt)
   std::vector<Real> phi;       // gravitational potential [J/kg]; energy = 1/2 Σ m phi
 
+  // solids (allocated only when a material has a shear modulus)
+  std::vector<Mat<D>> S;     // deviatoric stress [Pa] (evolved; symmetric, in-plane block in 2-D)
+  std::vector<Mat<D>> dSdt;  // [Pa/s]
+
+  // boundary particles (allocated only when a body is a boundary): 0 = free,
+  // 1 = fixed or moving with its body's prescribed velocity (not integrated)
+  std::vector<std::int32_t> boundary;
+
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
   void permute(const std::vector<std::uint32_t>& perm);
@@ -70,7 +81,8 @@ enum class FieldRole { Constant, Evolved, Derived, Rate };
 template <int D>
 using FieldMember = std::variant<std::vector<Real> ParticleStore<D>::*,
                                  std::vector<Vec<D>> ParticleStore<D>::*,
-                                 std::vector<std::int32_t> ParticleStore<D>::*>;
+                                 std::vector<std::int32_t> ParticleStore<D>::*,
+                                 std::vector<Mat<D>> ParticleStore<D>::*>;
 
 template <int D>
 struct FieldInfo {
@@ -83,24 +95,27 @@ struct FieldInfo {
 
 template <int D>
 inline const std::vector<FieldInfo<D>>& field_table() {
-  using S = ParticleStore<D>;
+  using PS = ParticleStore<D>;
   static const std::vector<FieldInfo<D>> table = {
-      {"x", &S::x, "m", FieldRole::Evolved, true},
-      {"v", &S::v, "m/s", FieldRole::Evolved, true},
-      {"m", &S::m, "kg", FieldRole::Constant, true},
-      {"rho", &S::rho, "kg/m^3", FieldRole::Evolved, true},
-      {"p", &S::p, "Pa", FieldRole::Derived, true},
-      {"u", &S::u, "J/kg", FieldRole::Evolved, true},
-      {"h", &S::h, "m", FieldRole::Evolved, true},
-      {"cs", &S::cs, "m/s", FieldRole::Derived, true},
-      {"material_id", &S::material_id, "1", FieldRole::Constant, true},
-      {"omega", &S::omega, "1", FieldRole::Derived, false},
-      {"dvdt", &S::dvdt, "m/s^2", FieldRole::Rate, false},
-      {"dudt", &S::dudt, "J/kg/s", FieldRole::Rate, false},
-      {"drhodt", &S::drhodt, "kg/m^3/s", FieldRole::Rate, false},
-      {"mu_max", &S::mu_max, "m/s", FieldRole::Derived, false},
-      {"a_grav", &S::a_grav, "m/s^2", FieldRole::Derived, true},
-      {"phi", &S::phi, "J/kg", FieldRole::Derived, false},
+      {"x", &PS::x, "m", FieldRole::Evolved, true},
+      {"v", &PS::v, "m/s", FieldRole::Evolved, true},
+      {"m", &PS::m, "kg", FieldRole::Constant, true},
+      {"rho", &PS::rho, "kg/m^3", FieldRole::Evolved, true},
+      {"p", &PS::p, "Pa", FieldRole::Derived, true},
+      {"u", &PS::u, "J/kg", FieldRole::Evolved, true},
+      {"h", &PS::h, "m", FieldRole::Evolved, true},
+      {"cs", &PS::cs, "m/s", FieldRole::Derived, true},
+      {"material_id", &PS::material_id, "1", FieldRole::Constant, true},
+      {"omega", &PS::omega, "1", FieldRole::Derived, false},
+      {"dvdt", &PS::dvdt, "m/s^2", FieldRole::Rate, false},
+      {"dudt", &PS::dudt, "J/kg/s", FieldRole::Rate, false},
+      {"drhodt", &PS::drhodt, "kg/m^3/s", FieldRole::Rate, false},
+      {"mu_max", &PS::mu_max, "m/s", FieldRole::Derived, false},
+      {"a_grav", &PS::a_grav, "m/s^2", FieldRole::Derived, true},
+      {"phi", &PS::phi, "J/kg", FieldRole::Derived, false},
+      {"S", &PS::S, "Pa", FieldRole::Evolved, true},
+      {"dSdt", &PS::dSdt, "Pa/s", FieldRole::Rate, false},
+      {"boundary", &PS::boundary, "1", FieldRole::Constant, true},
   };
   return table;
 }
@@ -130,6 +145,11 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
     a_grav.assign(n, Vec<D>::zero());
     phi.assign(n, 0);
   }
+  if (needs.solid) {
+    S.assign(n, Mat<D>::zero());
+    dSdt.assign(n, Mat<D>::zero());
+  }
+  if (needs.boundary) boundary.assign(n, 0);
 }
 
 template <int D>

@@ -35,6 +35,9 @@ struct SimulationConfig {
   // every step multiplies v by exp(-dt / damping_time). 0 = off.
   double damping_time = 0;                  // [s]
   double damping_end = 0;                   // [s]
+  // Solids: kernel-gradient correction of the velocity gradient
+  // (Randles & Libersky 1996); off by default.
+  bool kernel_correction = false;
 };
 
 struct ArtificialViscosity {
@@ -76,6 +79,14 @@ struct EosOptionsConfig {
   double cs_min = 0;           // [m/s] minimum sound speed; 0 = off
 };
 
+// Artificial stress against the tensile instability (Monaghan 2000; Gray,
+// Monaghan & Swift 2001); solids only, off by default.
+struct ArtificialStressConfig {
+  bool enabled = false;
+  double epsilon = 0.3;  // R' = -epsilon sigma'/rho^2 for tensile sigma'
+  double n = 4;          // exponent of f_ab = W(r)/W(dp)
+};
+
 struct MaterialConfig {
   std::string name;     // the key under [materials]
   std::string library;       // library material name or file as written ("" = inline)
@@ -89,12 +100,18 @@ struct MaterialConfig {
   EosOptionsConfig eos_options;
   ArtificialViscosity viscosity;
   ArtificialConductivity conductivity;
+  double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid
+  ArtificialStressConfig artificial_stress;
 };
 
 // Box: min..max. Sphere (a disk in 2-D, a segment in 1-D): center, radius.
 // Ring (2-D annulus, 3-D spherical shell): center, inner_radius..radius.
 enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3 };
 enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
+// Boundary particles (walls, clamps): not integrated, but neighbours of the
+// others with their own state. Fixed: at rest; moving: with the body's
+// velocity, for ever.
+enum class BoundaryKind : int { None = 0, Fixed = 1, Moving = 2 };
 
 struct BodyConfig {
   BodyShape shape = BodyShape::Box;
@@ -107,6 +124,7 @@ struct BodyConfig {
   double pressure = -1;      // [Pa]  one of pressure / internal_energy
   double internal_energy = -1;  // [J/kg]
   std::array<double, 3> velocity{};  // [m/s]
+  BoundaryKind boundary = BoundaryKind::None;
   // shape = "polytrope" (3-D only): a self-gravitating polytrope in
   // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
   // solution; K follows from radius, mass, n and gravity.G. The parser

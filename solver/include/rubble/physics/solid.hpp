@@ -1,0 +1,111 @@
+#pragma once
+// The SPH equations of elastic solids as pair interactions (PHYSICS.md §1;
+// Libersky & Petschek 1990; Benz & Asphaug 1994; Gray, Monaghan & Swift
+// 2001). With the total stress sigma = -p I + S and gbar the kernel-averaged
+// gradient grad_a W (continuity density, Omega = 1):
+//
+//   dv_a/dt   = sum_b m_b [ sigma_a/rho_a^2 + sigma_b/rho_b^2 + (R_a + R_b) f_ab^n - Pi_ab I ] . gbar
+//   du_a/dt   = - sum_b m_b (sigma_a/rho_a^2) : (v_ab (x) gbar)
+//               - 1/2 sum_b m_b [ (R_a + R_b) f_ab^n - Pi_ab I ] : (v_ab (x) gbar)
+//   drho_a/dt =   sum_b m_b v_ab . gbar
+//
+// The pair force is antisymmetric in (a,b) (momentum to round-off), and
+// du/dt is exactly the work of the pair force, so kinetic + internal energy
+// is conserved by the spatial discretisation. The shear part of du_a/dt,
+// -(1/rho_a^2) sum_b m_b S_a : (v_ab (x) gbar) = (1/rho_a) S_a : L_a with
+// L_a = sum_b (m_b/rho_a)(v_b - v_a) (x) gbar, is the SPH form of the shear
+// heating (1/rho) S : eps_dot (jaumann_rate.hpp: shear_heating). With S = 0
+// and no artificial stress this is hydro_pair's continuity-density form.
+#include <cmath>
+
+#include "rubble/core/hd.hpp"
+#include "rubble/core/mat.hpp"
+#include "rubble/physics/artificial_stress.hpp"
+#include "rubble/physics/artificial_viscosity.hpp"
+#include "rubble/physics/kernels.hpp"
+
+namespace rubble {
+
+// What one particle brings to a solid pair interaction.
+template <int D>
+struct SolidParticle {
+  Vec<D> x, v;
+  Real m, rho, p, h, cs;
+  Mat<D> S;           // deviatoric stress
+  Mat<D> R;           // artificial stress tensor (artificial_stress_tensor; 0 = off)
+  ViscosityParams av;  // of the particle's material
+  Real dp;            // initial particle spacing of its material (artificial stress)
+  Real as_exponent;   // n of the artificial stress (0 = off)
+};
+
+template <int D>
+struct SolidPairRates {
+  Vec<D> dvdt;
+  Real dudt;
+  Real drhodt;
+  Real mu;  // |mu_ab| for the Courant condition
+};
+
+// sigma / rho^2 of a particle.
+template <int D>
+RUBBLE_HD_INLINE Mat<D> stress_over_rho2(Real p, const Mat<D>& S, Real rho) {
+  Mat<D> s = S;
+  for (int i = 0; i < D; ++i) s.m[i][i] -= p;
+  return (Real(1) / (rho * rho)) * s;
+}
+
+// The complete solid interaction of b on a; dx = x_a - x_b (minimum image).
+template <int D>
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a,
+                                              const SolidParticle<D>& b, const Vec<D>& dx) {
+  SolidPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+  const Real r2 = norm2(dx);
+  const Real r = std::sqrt(r2);
+  if (r <= Real(0)) return out;
+  if (r >= a.h && r >= b.h) return out;
+
+  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel, dx, a.h) + kernel_grad<D>(kernel, dx, b.h));
+  const Vec<D> dv = a.v - b.v;
+
+  const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
+  const Real hbar = Real(0.5) * (a.h + b.h);
+  const Real mu = viscosity_mu(dot(dv, dx), r2, monaghan_h(hbar));
+  const Real rhobar = Real(0.5) * (a.rho + b.rho);
+  const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
+
+  const Mat<D> sa = stress_over_rho2(a.p, a.S, a.rho);
+  const Mat<D> sb = stress_over_rho2(b.p, b.S, b.rho);
+  // pair terms that are shared equally (viscosity, artificial stress)
+  Mat<D> shared = Mat<D>::zero();
+  for (int i = 0; i < D; ++i) shared.m[i][i] = -pi_ab;
+  const Real n = Real(0.5) * (a.as_exponent + b.as_exponent);
+  if (n > Real(0)) {
+    const Real dp = Real(0.5) * (a.dp + b.dp);
+    const Real fn = artificial_stress_factor(kernel_w<D>(kernel, r, hbar), kernel_w<D>(kernel, dp, hbar), n);
+    shared += fn * (a.R + b.R);
+  }
+
+  out.dvdt = b.m * ((sa + sb + shared) * g);
+  // -(sigma_a/rho_a^2 + shared/2) : (v_ab (x) g)
+  const Mat<D> work = sa + Real(0.5) * shared;
+  out.dudt = -b.m * double_dot(work, Mat<D>::outer(dv, g));
+  out.drhodt = b.m * dot(dv, g);
+  out.mu = -mu;
+  return out;
+}
+
+// Longitudinal (P-wave) speed of an elastic solid, the signal speed of the
+// Courant condition: c_l^2 = c^2 + 4 mu / (3 rho), c the bulk sound speed.
+RUBBLE_HD_INLINE Real elastic_signal_speed(Real cs, Real shear_modulus, Real rho) {
+  return std::sqrt(cs * cs + Real(4) * shear_modulus / (Real(3) * rho));
+}
+
+// One neighbour's contribution to the velocity gradient of a:
+// L_a += (m_b/rho_b) (v_b - v_a) (x) grad_a W_ab (PHYSICS.md §1); the
+// kernel-gradient correction multiplies the sum from the right by C_a.
+template <int D>
+RUBBLE_HD_INLINE Mat<D> velocity_gradient_pair_term(Real m_b, Real rho_b, const Vec<D>& v_ba, const Vec<D>& grad_a_w) {
+  return (m_b / rho_b) * Mat<D>::outer(v_ba, grad_a_w);
+}
+
+}  // namespace rubble

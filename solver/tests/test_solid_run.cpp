@@ -1,0 +1,134 @@
+// Solids through the whole pipeline (issue #4): the scene keys (shear
+// modulus, artificial stress, sphere and ring shapes, boundary bodies), the
+// fields a run allocates (no stress fields for hydro-only scenes), a block
+// at rest staying at rest, and boundary particles that are not integrated.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "rubble/core/error.hpp"
+#include "rubble/io/snapshot.hpp"
+#include "rubble/run.hpp"
+
+using namespace rubble;
+
+namespace {
+
+// A 2-D block of dimensionless rubber (inline: K = 1, mu = 0.22).
+std::string block_scene(const std::string& material_extra, const std::string& extra_bodies = "",
+                        const std::string& density = "") {
+  return "[simulation]\ndimension = 2\nend_time = 0.5\nintegrator = \"leapfrog\"\n" + density +
+         "\n[materials.rubber]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n" +
+         material_extra +
+         "\n[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n"
+         "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\n" +
+         extra_bodies;
+}
+
+std::vector<std::string> snapshot_datasets(const Scene& s, const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
+  std::filesystem::remove_all(dir);
+  RunOptions opt;
+  opt.out_dir = dir.string();
+  opt.quiet = true;
+  run_scene(s, opt);
+  ParticleStore<2> ps;
+  SnapshotMeta meta;
+  read_snapshot<2>((dir / snapshot_filename(s.output.name, 1)).string(), ps, meta);
+  std::filesystem::remove_all(dir);
+  return ps.allocated_fields();
+}
+
+bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+
+}  // namespace
+
+TEST(SolidScene, KeysAreReadAndValidated) {
+  const Scene s = parse_scene(block_scene("shear_modulus = 0.22\nartificial_stress = { epsilon = 0.25, n = 4 }"), "t.toml");
+  EXPECT_EQ(s.materials[0].shear_modulus, 0.22);
+  EXPECT_TRUE(s.materials[0].artificial_stress.enabled);
+  EXPECT_EQ(s.materials[0].artificial_stress.epsilon, 0.25);
+  // a solid without simulation.density gets continuity density ...
+  EXPECT_EQ(s.simulation.density, DensityForm::Continuity);
+  // ... and one that asks for summation is refused
+  EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", "", "density = \"summation\"\n"), "t.toml"), InputError);
+  EXPECT_THROW(parse_scene(block_scene("shear_modulus = -1.0"), "t.toml"), InputError);
+  EXPECT_THROW(parse_scene(block_scene("artificial_stress = { epsilon = 0.3 }"), "t.toml"), InputError);  // fluid
+  // hydro materials stay hydro, with summation density by default
+  const Scene h = parse_scene(block_scene(""), "t.toml");
+  EXPECT_EQ(h.materials[0].shear_modulus, 0.0);
+  EXPECT_EQ(h.simulation.density, DensityForm::Summation);
+}
+
+TEST(SolidScene, RingAndSphereShapes) {
+  const std::string ring =
+      "[[bodies]]\nshape = \"ring\"\nmaterial = \"rubber\"\ncenter = [5.0, 0.0]\nradius = 1.0\ninner_radius = 0.5\n"
+      "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\n";
+  const Scene s = parse_scene(block_scene("shear_modulus = 0.22", ring), "t.toml");
+  ASSERT_EQ(s.bodies.size(), 2u);
+  EXPECT_EQ(s.bodies[1].shape, BodyShape::Ring);
+  EXPECT_EQ(s.bodies[1].inner_radius, 0.5);
+  EXPECT_EQ(s.bodies[1].center[0], 5.0);
+  std::string sphere = ring;
+  sphere.replace(sphere.find("\"ring\""), 6, "\"sphere\"");
+  EXPECT_THROW(parse_scene(block_scene("", sphere), "t.toml"), InputError);  // inner_radius is not a sphere key
+  sphere.replace(sphere.find("inner_radius = 0.5\n"), 19, "");
+  EXPECT_EQ(parse_scene(block_scene("", sphere), "t.toml").bodies[1].shape, BodyShape::Sphere);
+  std::string bad = ring;
+  bad.replace(bad.find("inner_radius = 0.5"), 18, "inner_radius = 1.5");
+  EXPECT_THROW(parse_scene(block_scene("", bad), "t.toml"), InputError);
+}
+
+// Issue #4 item 1: hydro-only scenes allocate no stress fields.
+TEST(SolidRun, StressFieldsOnlyForSolids) {
+  const auto hydro = snapshot_datasets(parse_scene(block_scene(""), "t.toml"), "hydro");
+  EXPECT_FALSE(has(hydro, "S"));
+  EXPECT_FALSE(has(hydro, "boundary"));
+  const auto solid = snapshot_datasets(parse_scene(block_scene("shear_modulus = 0.22"), "t.toml"), "solid");
+  EXPECT_TRUE(has(solid, "S"));
+  EXPECT_FALSE(has(solid, "boundary"));
+}
+
+TEST(SolidRun, BlockAtRestStaysAtRest) {
+  const FinalState fs = run_scene(parse_scene(block_scene("shear_modulus = 0.22\nartificial_stress = {}"), "t.toml"),
+                                  RunOptions{"", false, false, true});
+  double vmax = 0;
+  for (double v : fs.v) vmax = std::max(vmax, std::fabs(v));
+  EXPECT_LT(vmax, 1e-12);
+}
+
+// Boundary particles are not integrated: fixed ones stay, moving ones move
+// with their prescribed velocity, whatever the forces on them.
+TEST(SolidRun, BoundaryBodiesFollowTheScene) {
+  const std::string walls =
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, -0.3]\nmax = [1.0, 0.0]\nspacing = 0.1\n"
+      "density = 1.0\ninternal_energy = 0.0\nboundary = \"fixed\"\n"
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, 1.0]\nmax = [1.0, 1.3]\nspacing = 0.1\n"
+      "density = 1.0\ninternal_energy = 0.0\nboundary = \"moving\"\nvelocity = [0.0, -0.1]\n";
+  const Scene s = parse_scene(block_scene("shear_modulus = 0.22", walls), "t.toml");
+  EXPECT_EQ(s.bodies[1].boundary, BoundaryKind::Fixed);
+  EXPECT_EQ(s.bodies[2].boundary, BoundaryKind::Moving);
+  const FinalState fs = run_scene(s, RunOptions{"", false, false, true});
+  int fixed = 0, moving = 0;
+  for (std::size_t i = 0; i < fs.m.size(); ++i) {
+    const double vx = fs.v[2 * i], vy = fs.v[2 * i + 1], y = fs.x[2 * i + 1];
+    if (y < 0) {  // the fixed wall
+      EXPECT_EQ(vx, 0.0);
+      EXPECT_EQ(vy, 0.0);
+      ++fixed;
+    } else if (y > 1.0 - 0.05) {  // the moving lid: started at y >= 1.05, moved down by 0.05
+      EXPECT_EQ(vx, 0.0);
+      EXPECT_NEAR(vy, -0.1, 1e-15);
+      ++moving;
+    }
+  }
+  EXPECT_EQ(fixed, 30);
+  EXPECT_EQ(moving, 30);
+  // a fixed body with a velocity is an error
+  std::string bad = walls;
+  bad.replace(bad.find("boundary = \"fixed\"\n"), 19, "boundary = \"fixed\"\nvelocity = [1.0, 0.0]\n");
+  EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", bad), "t.toml"), InputError);
+}
