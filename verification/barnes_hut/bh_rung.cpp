@@ -5,6 +5,8 @@
 //           [--orders monopole,quadrupole] --records DIR [--checks] [--report-only]
 //   bh_rung timing --case plummer|uniform --sizes 10000,30000,100000
 //           [--direct-max 100000] --records DIR [--checks]
+//   bh_rung scatter --case plummer|uniform --n 20000 --thetas 0.3 [--orders monopole]
+//           [--seeds 12] [--roots 1.25,1.5] --records DIR [--checks]
 //
 // accuracy: one particle distribution (fixed seed), accelerations by direct
 // summation (the reference) and by the tree at every theta, monopole and
@@ -20,6 +22,20 @@
 // quadrupole) and of direct summation at each N, the best of a few
 // repetitions, and the exponents of least-squares power laws t ∝ N^p.
 // Check: the tree's p <= 1.3 (issue #5). One JSON record per N.
+//
+// scatter (diagnostic): the accuracy measurement (table conditions) repeated
+// over --seeds particle sets (the first is accuracy's), to show how much the
+// median and 99th percentile move between realisations, and, for the
+// monopole, the same particles through an independent textbook tree
+// (TextbookTree below: insertion, one particle per leaf, recursive walk)
+// with (a) the solver's criterion on the same root cube, which must agree
+// with rubble::Octree to round-off (the check), (b) the plain s/d < theta of
+// Barnes & Hut (1986) on the same root cube, and (c) the solver's criterion
+// on root cubes --roots times larger (same centre): the octree's cell sizes
+// relative to the particle set are a free choice of any implementation,
+// and the table's independent implementation does not say which it made.
+// One JSON record per (order, theta); the table values are printed, not
+// judged (the accuracy mode judges them on its fixed particle set).
 //
 // Exit status 1 if a check fails (0 with --report-only), 2 on bad usage.
 #include <algorithm>
@@ -57,6 +73,8 @@ struct Args {
   std::vector<double> sizes{10000, 30000, 100000};
   std::vector<MultipoleOrder> orders{MultipoleOrder::Monopole, MultipoleOrder::Quadrupole};
   double direct_max = 1e5;
+  int seeds = 12;
+  std::vector<double> roots{1.25, 1.5};
   bool checks = false, report_only = false;
 };
 
@@ -69,10 +87,11 @@ std::vector<double> parse_list(const std::string& s) {
 }
 
 Args parse_args(int argc, char** argv) {
-  if (argc < 2) throw std::runtime_error("usage: bh_rung accuracy|timing [options]");
+  if (argc < 2) throw std::runtime_error("usage: bh_rung accuracy|timing|scatter [options]");
   Args a;
   a.mode = argv[1];
-  if (a.mode != "accuracy" && a.mode != "timing") throw std::runtime_error("first argument must be accuracy or timing");
+  if (a.mode != "accuracy" && a.mode != "timing" && a.mode != "scatter")
+    throw std::runtime_error("first argument must be accuracy, timing or scatter");
   for (int i = 2; i < argc; ++i) {
     const std::string k = argv[i];
     auto next = [&]() -> std::string {
@@ -94,6 +113,8 @@ Args parse_args(int argc, char** argv) {
       }
     }
     else if (k == "--direct-max") a.direct_max = std::stod(next());
+    else if (k == "--seeds") a.seeds = std::stoi(next());
+    else if (k == "--roots") a.roots = parse_list(next());
     else if (k == "--records") a.records = next();
     else if (k == "--label") a.label = next();
     else if (k == "--checks") a.checks = true;
@@ -468,10 +489,329 @@ int run_timing(const Args& args) {
   return (all_passed || args.report_only) ? 0 : 1;
 }
 
+// ---- scatter: realisations, a textbook tree, the root cube -------------------------
+
+// Barnes & Hut (1986) as it is usually written, independently of
+// rubble::Octree (no Morton keys, no skipped levels, no stackless walk):
+// particles are inserted one at a time into a cube that splits every cell
+// holding two of them (one particle per leaf); cells carry their geometric
+// centre and side, mass and centre of mass; the walk recurses from the root
+// and uses a cell's monopole when
+//     s/d < theta                   (plain Barnes & Hut 1986), or
+//     d > s/theta + delta           (the solver's criterion, delta = |com - cell centre|)
+// with d the distance to the centre of mass. A leaf (one particle) is exact.
+// No softening; monopole only; double precision whatever Real is.
+class TextbookTree {
+ public:
+  TextbookTree(const std::vector<Vec<3>>& x, double particle_mass, const double centre[3], double side)
+      : x_(x), m_(particle_mass) {
+    cells_.reserve(2 * x.size() + 1);
+    Cell root;
+    for (int k = 0; k < 3; ++k) root.c[k] = centre[k];
+    root.half = 0.5 * side;
+    cells_.push_back(root);
+    for (std::size_t i = 0; i < x.size(); ++i) insert(0, int(i), 0);
+    finish(0);
+  }
+
+  // Acceleration (G = 1) of particle i due to all others.
+  Vec<3> accel(std::size_t i, double theta, bool com_offset) const {
+    double a[3] = {0, 0, 0};
+    walk(0, int(i), theta, com_offset, a);
+    Vec<3> out;
+    for (int k = 0; k < 3; ++k) out[k] = Real(a[k]);
+    return out;
+  }
+
+ private:
+  struct Cell {
+    double c[3] = {0, 0, 0}, half = 0, m = 0, com[3] = {0, 0, 0};
+    int particle = -1, count = 0;
+    int child[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+  };
+
+  int octant_of(const Cell& cell, int i) const {
+    int o = 0;
+    for (int k = 0; k < 3; ++k)
+      if (double(x_[i][k]) >= cell.c[k]) o |= 1 << k;
+    return o;
+  }
+  int child_of(int cell, int o) {
+    if (cells_[cell].child[o] < 0) {
+      Cell ch;
+      ch.half = 0.5 * cells_[cell].half;
+      for (int k = 0; k < 3; ++k) ch.c[k] = cells_[cell].c[k] + (((o >> k) & 1) ? ch.half : -ch.half);
+      cells_[cell].child[o] = int(cells_.size());
+      cells_.push_back(ch);
+    }
+    return cells_[cell].child[o];
+  }
+  void insert(int cell, int i, int depth) {
+    if (depth > 60) throw std::runtime_error("TextbookTree: coincident particles");
+    if (cells_[cell].count == 0) {
+      cells_[cell].particle = i;
+      cells_[cell].count = 1;
+      return;
+    }
+    if (cells_[cell].count == 1) {  // split: push the resident particle down
+      const int j = cells_[cell].particle;
+      cells_[cell].particle = -1;
+      insert(child_of(cell, octant_of(cells_[cell], j)), j, depth + 1);
+    }
+    ++cells_[cell].count;
+    insert(child_of(cell, octant_of(cells_[cell], i)), i, depth + 1);
+  }
+  void finish(int cell) {
+    Cell& c = cells_[cell];
+    if (c.count == 1) {
+      c.m = m_;
+      for (int k = 0; k < 3; ++k) c.com[k] = double(x_[c.particle][k]);
+      return;
+    }
+    double m = 0, mx[3] = {0, 0, 0};
+    for (int o = 0; o < 8; ++o) {
+      const int ch = cells_[cell].child[o];
+      if (ch < 0) continue;
+      finish(ch);
+      m += cells_[ch].m;
+      for (int k = 0; k < 3; ++k) mx[k] += cells_[ch].m * cells_[ch].com[k];
+    }
+    Cell& cc = cells_[cell];
+    cc.m = m;
+    for (int k = 0; k < 3; ++k) cc.com[k] = mx[k] / m;
+  }
+  void walk(int cell, int i, double theta, bool com_offset, double a[3]) const {
+    const Cell& c = cells_[cell];
+    if (c.count == 1 && c.particle == i) return;
+    double r[3], d2 = 0, off2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      r[k] = double(x_[i][k]) - c.com[k];
+      d2 += r[k] * r[k];
+      off2 += (c.com[k] - c.c[k]) * (c.com[k] - c.c[k]);
+    }
+    const double d = std::sqrt(d2), s = 2 * c.half;
+    const bool accept = c.count == 1 || (com_offset ? d > s / theta + std::sqrt(off2) : s < theta * d);
+    if (accept) {
+      const double f = c.m / (d2 * d);
+      for (int k = 0; k < 3; ++k) a[k] -= f * r[k];
+      return;
+    }
+    for (int o = 0; o < 8; ++o)
+      if (c.child[o] >= 0) walk(c.child[o], i, theta, com_offset, a);
+  }
+
+  const std::vector<Vec<3>>& x_;
+  double m_;
+  std::vector<Cell> cells_;
+};
+
+// p99 by linear interpolation between order statistics (numpy's default),
+// to compare with the nearest rank used everywhere else.
+double p99_interpolated(std::vector<double> e) {
+  std::sort(e.begin(), e.end());
+  const double pos = 0.99 * double(e.size() - 1);
+  const std::size_t k = std::size_t(pos);
+  const double f = pos - double(k);
+  return k + 1 < e.size() ? e[k] * (1 - f) + e[k + 1] * f : e[k];
+}
+
+int run_scatter(const Args& args) {
+  const std::size_t n = args.n;
+  const std::string label = (args.label.empty() ? args.dist + "_n" + std::to_string(n) : args.label) + "_scatter";
+  const int seeds = std::max(1, args.seeds);
+  const rubble::KernelType kernel = rubble::KernelType::CubicSpline;  // unused without softening
+  const std::vector<Real> m(n, Real(1.0 / double(n)));
+  // Uniform sphere (radius 1): 6.4 % of the particles lie within 0.4 of the
+  // centre, where |a| ∝ r is small. Plummer (a = 1): within the scale radius.
+  const double r_inner = args.dist == "uniform" ? 0.4 : 1.0;
+
+  // Per (order, theta) and variant: the median and p99 of every seed.
+  struct Series {
+    std::string name;
+    std::vector<double> median, p99;
+  };
+  struct Case {
+    MultipoleOrder order;
+    double theta;
+    std::vector<Series> series;  // [0] rubble::Octree, then (monopole) the textbook variants
+    double textbook_max_diff = 0;
+    double p99_interp_max_rel = 0;  // |p99 interpolated - nearest rank| / nearest rank, largest
+    double tail_inner_min = 1;      // smallest fraction (over sets) of the worst 1 % within r_inner of the centre
+  };
+  std::vector<Case> cases;
+  for (MultipoleOrder order : args.orders)
+    for (double theta : args.thetas) {
+      if (!(theta > 0)) continue;
+      Case c{order, theta, {{"rubble::Octree", {}, {}}}, 0, 0};
+      if (order == MultipoleOrder::Monopole) {
+        c.series.push_back({"textbook, s/theta + delta", {}, {}});
+        c.series.push_back({"textbook, plain s/d < theta", {}, {}});
+        for (double f : args.roots) c.series.push_back({"textbook, s/theta + delta, root x" + num(f), {}, {}});
+      }
+      cases.push_back(c);
+    }
+
+  const auto t_start = std::chrono::steady_clock::now();
+  for (int sd = 0; sd < seeds; ++sd) {
+    const std::uint64_t seed = seed_for(args.dist, n) + std::uint64_t(sd) * 0x9E3779B97F4A7C15ULL;
+    const std::vector<Vec<3>> x = make_sphere(args.dist, n, seed);
+    std::vector<Vec<3>> a_dir(n);
+    rubble::direct_gravity(x.data(), m.data(), nullptr, n, kernel, Real(1), a_dir.data(), nullptr);
+    auto errors_of = [&](const std::vector<Vec<3>>& a) {
+      std::vector<double> e(n);
+      for (std::size_t i = 0; i < n; ++i) e[i] = double(rubble::norm(a[i] - a_dir[i])) / double(rubble::norm(a_dir[i]));
+      return e;
+    };
+    std::printf("set %2d:", sd);
+    for (Case& c : cases) {
+      rubble::OctreeOptions opt;
+      opt.theta = Real(c.theta);
+      opt.order = c.order;
+      opt.leaf_size = 1;
+      opt.group_size = 1;
+      rubble::Octree tree(opt);
+      tree.build(x.data(), m.data(), nullptr, n);
+      std::vector<Vec<3>> a(n);
+      tree.field(Real(1), a.data(), nullptr);
+      const std::vector<double> e = errors_of(a);
+      const Stats s = stats_of(e);
+      c.series[0].median.push_back(s.median);
+      c.series[0].p99.push_back(s.p99);
+      c.p99_interp_max_rel = std::max(c.p99_interp_max_rel, std::fabs(p99_interpolated(e) - s.p99) / s.p99);
+      {  // where the worst 1 % lie: distance from the set's centre of mass
+        Vec<3> com = Vec<3>::zero();
+        for (const Vec<3>& p : x) com += p * Real(1.0 / double(n));
+        std::size_t tail = 0, inner = 0;
+        for (std::size_t i = 0; i < n; ++i)
+          if (e[i] > s.p99) {
+            ++tail;
+            inner += double(rubble::norm(x[i] - com)) < r_inner;
+          }
+        if (tail > 0) c.tail_inner_min = std::min(c.tail_inner_min, double(inner) / double(tail));
+      }
+      std::printf("  %s theta %.2f: %.3e / %.3e", order_name(c.order), c.theta, s.median, s.p99);
+      if (c.order != MultipoleOrder::Monopole) continue;
+      // The textbook tree on the same root cube (the key box), then on larger ones.
+      const rubble::Box<3>& kb = tree.key_box();
+      double centre[3], side = 0;
+      for (int k = 0; k < 3; ++k) {
+        centre[k] = 0.5 * (double(kb.lo[k]) + double(kb.hi[k]));
+        side = std::max(side, double(kb.hi[k]) - double(kb.lo[k]));
+      }
+      std::size_t si = 1;
+      auto textbook = [&](double root_factor, bool com_offset, bool compare) {
+        const TextbookTree tb(x, 1.0 / double(n), centre, side * root_factor);
+        std::vector<Vec<3>> at(n);
+        double diff = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(max : diff)
+        for (std::size_t i = 0; i < n; ++i) {
+          at[i] = tb.accel(i, c.theta, com_offset);
+          if (compare) diff = std::max(diff, double(rubble::norm(at[i] - a[i])) / double(rubble::norm(a_dir[i])));
+        }
+        const Stats st = stats_of(errors_of(at));
+        c.series[si].median.push_back(st.median);
+        c.series[si].p99.push_back(st.p99);
+        ++si;
+        return diff;
+      };
+      c.textbook_max_diff = std::max(c.textbook_max_diff, textbook(1.0, true, true));
+      textbook(1.0, false, false);
+      for (double f : args.roots) textbook(f, true, false);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  const double wall = seconds_since(t_start);
+
+  bool all_passed = true;
+  for (const Case& c : cases) {
+    double tmed = NAN, tp99 = NAN;
+    const bool has_table = n == 20000 && table_value(args.dist, c.order, c.theta, tmed, tp99);
+    std::printf("%s %s theta %.2f over %d particle sets (one particle per leaf, no softening); median | p99: "
+                "mean [min, max]%s\n",
+                label.c_str(), order_name(c.order), c.theta, seeds,
+                has_table ? (", sets meeting PHYSICS.md §6 (" + num(tmed) + " / " + num(tp99) + ")").c_str() : "");
+    std::vector<std::pair<std::string, Json>> series_json;
+    for (const Series& se : c.series) {
+      auto mean = [](const std::vector<double>& v) {
+        double t = 0;
+        for (double e : v) t += e;
+        return t / double(v.size());
+      };
+      const auto [mn_med, mx_med] = std::minmax_element(se.median.begin(), se.median.end());
+      const auto [mn_p99, mx_p99] = std::minmax_element(se.p99.begin(), se.p99.end());
+      int meet_med = 0, meet_p99 = 0, meet_both = 0;
+      for (std::size_t k = 0; k < se.median.size(); ++k) {
+        meet_med += se.median[k] <= tmed;
+        meet_p99 += se.p99[k] <= tp99;
+        meet_both += se.median[k] <= tmed && se.p99[k] <= tp99;
+      }
+      std::printf("  %-38s %.3e [%.3e, %.3e] | %.3e [%.3e, %.3e]", se.name.c_str(), mean(se.median), *mn_med,
+                  *mx_med, mean(se.p99), *mn_p99, *mx_p99);
+      if (has_table) std::printf("  median %d, p99 %d, both %d of %d", meet_med, meet_p99, meet_both, seeds);
+      std::printf("\n");
+      series_json.push_back({se.name, Json::object({{"median", se.median}, {"p99", se.p99}})});
+    }
+    std::printf("  rubble::Octree: at least %.0f %% of the errors above the p99 lie within r < %g of the centre of mass; "
+                "p99 by linear interpolation differs from the nearest rank by at most %.1e relative\n",
+                100 * c.tail_inner_min, r_inner, c.p99_interp_max_rel);
+    std::vector<Check> checks;
+    if (args.checks && c.order == MultipoleOrder::Monopole)
+      checks.push_back({"max |a_octree - a_textbook| / |a_direct| over all particle sets (same criterion, same root)",
+                        c.textbook_max_diff, 1e-10, "<=",
+                        "an independent textbook tree with the solver's criterion must give the same forces"});
+    print_checks(checks);
+    std::vector<Json> cj;
+    for (const auto& ch : checks) {
+      cj.push_back(ch.json());
+      all_passed = all_passed && ch.passed();
+    }
+    const Series& ours = c.series[0];
+    double mean_med = 0, mean_p99 = 0;
+    for (std::size_t k = 0; k < ours.median.size(); ++k) {
+      mean_med += ours.median[k] / double(seeds);
+      mean_p99 += ours.p99[k] / double(seeds);
+    }
+    const Json record = Json::object({
+        {"rung", "barnes_hut"},
+        {"case", label},
+        {"resolution", 1.0 / c.theta},
+        {"resolution_name", "1/theta"},
+        {"n_particles", n},
+        {"dimension", 3},
+        {"parameters", Json::object({{"distribution", args.dist},
+                                     {"order", order_name(c.order)},
+                                     {"leaf_size", 1},
+                                     {"group_size", 1},
+                                     {"softening", 0.0},
+                                     {"particle_sets", seeds}})},
+        {"theta", c.theta},
+        {"errors", Json::object({{"acc", Json::object({{"median", mean_med}, {"p99", mean_p99}})}})},
+        {"notes", "errors.acc: means over the particle sets of rubble::Octree's median and p99; per-set values of "
+                  "every variant under scatter"},
+        {"scatter", Json::object(series_json)},
+        {"tail_fraction_inner", c.tail_inner_min},
+        {"tail_inner_radius", r_inner},
+        {"textbook_max_diff", c.order == MultipoleOrder::Monopole ? Json(c.textbook_max_diff) : Json()},
+        {"wall_seconds", wall},
+        {"backend", "cpu"},
+        {"precision", precision_name()},
+        {"commit", RUBBLE_COMMIT},
+        {"checks", Json::array(cj)},
+    });
+    char stem[160];
+    std::snprintf(stem, sizeof stem, "barnes_hut-%s-%s-theta%.3f", label.c_str(), order_name(c.order), c.theta);
+    rubble::verification::write_record(args.records, stem, record);
+  }
+  std::fflush(stdout);
+  return (all_passed || args.report_only) ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   const Args args = parse_args(argc, argv);
+  if (args.mode == "scatter") return run_scatter(args);
   return args.mode == "accuracy" ? run_accuracy(args) : run_timing(args);
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bh_rung: error: %s\n", e.what());
