@@ -14,6 +14,7 @@
 #include "rubble/physics/kernels.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/timestep.hpp"
+#include "rubble/physics/xsph.hpp"
 #include "rubble/scene/materials.hpp"
 
 namespace rubble {
@@ -68,6 +69,9 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
     grad_v_.assign(ps_.n, Mat<D>::zero());
     if (artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
   }
+  xsph_epsilon_ = Real(scene.simulation.xsph);
+  if (xsph_epsilon_ > Real(0) && ps_.xsph_v.size() != ps_.n)
+    throw RunError("XSPH needs the xsph_v field allocated");
 }
 
 template <int D>
@@ -270,6 +274,30 @@ void HydroCpu<D>::solid_rates() {
   }
 }
 
+// XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp).
+// Boundary particles move with their own velocity (no correction).
+template <int D>
+void HydroCpu<D>::xsph_velocity() {
+  const std::size_t n = ps_.n;
+  const bool has_boundary = !ps_.boundary.empty();
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t a = 0; a < n; ++a) {
+    Vec<D> sum = Vec<D>::zero();
+    if (!(has_boundary && ps_.boundary[a])) {
+      for (std::uint32_t k = nbrs_.offset[a]; k < nbrs_.offset[a + 1]; ++k) {
+        const std::uint32_t b = nbrs_.index[k];
+        // velocity is smoothed within a material only, not across an
+        // interface between bodies of different materials (contact)
+        if (ps_.material_id[b] != ps_.material_id[a]) continue;
+        const Real r = norm(domain_.separation(ps_.x[a], ps_.x[b]));
+        const Real w = Real(0.5) * (kernel_w<D>(kernel_, r, ps_.h[a]) + kernel_w<D>(kernel_, r, ps_.h[b]));
+        if (w > Real(0)) sum += xsph_pair_term<D>(ps_.m[b], ps_.rho[a], ps_.rho[b], ps_.v[b] - ps_.v[a], w);
+      }
+    }
+    ps_.xsph_v[a] = xsph_epsilon_ * sum;
+  }
+}
+
 // Boundary particles are not integrated: their rates are zero, so they keep
 // their velocity (0 when fixed) and state, and move with it.
 template <int D>
@@ -299,6 +327,7 @@ void HydroCpu<D>::self_gravity() {
 
 template <int D>
 void HydroCpu<D>::evaluate() {
+  ++evaluations_;
   if (summation_) summation_density_and_h();
   else h_from_continuity_density();
   equation_of_state();
@@ -306,6 +335,7 @@ void HydroCpu<D>::evaluate() {
   else rates();
   if (gravity_.enabled()) self_gravity();
   if (!ps_.boundary.empty()) hold_boundaries();
+  if (xsph_epsilon_ > Real(0)) xsph_velocity();
 }
 
 template <int D>

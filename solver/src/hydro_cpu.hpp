@@ -45,6 +45,8 @@ class HydroCpu {
   const Box<D>& domain() const { return domain_; }
   bool summation_density() const { return summation_; }
   std::int64_t neighbor_rebuilds() const { return rebuilds_; }
+  // Calls of evaluate() so far (each evaluates every particle once).
+  std::int64_t evaluations() const { return evaluations_; }
   // Solids: does the run evolve the deviatoric stress (the Solid feature set)?
   bool solid() const { return solid_; }
   // Kernel-gradient correction: particle evaluations where the correction
@@ -62,6 +64,7 @@ class HydroCpu {
   void solid_rates();  // feature set Solid: full stress, Jaumann rate, artificial stress
   void hold_boundaries();
   void self_gravity();
+  void xsph_velocity();  // XSPH correction to dx/dt (when simulation.xsph > 0)
 
   ParticleStore<D>& ps_;
   Box<D> domain_;
@@ -81,6 +84,8 @@ class HydroCpu {
   std::vector<Mat<D>> grad_v_;  // solids: velocity gradient (scratch)
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
+  Real xsph_epsilon_ = 0;  // 0 = off
+  std::int64_t evaluations_ = 0;
 };
 
 }  // namespace rubble

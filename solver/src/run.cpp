@@ -114,6 +114,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   needs.gravity = scene.gravity.mode != GravityMode::Off;
   for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
   for (const BodyConfig& b : scene.bodies) needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
+  needs.xsph = sim.xsph > 0;
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);
 
@@ -200,6 +201,11 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   fs.u.assign(ps.u.begin(), ps.u.end());
   fs.h.assign(ps.h.begin(), ps.h.end());
   fs.cs.assign(ps.cs.begin(), ps.cs.end());
+  fs.correction_fallbacks = sys.correction_fallbacks();
+  fs.particle_evaluations = sys.evaluations() * std::int64_t(ps.n);
+  if (sim.kernel_correction && sys.solid() && !opt.quiet)
+    std::fprintf(stderr, "kernel-gradient correction: %lld of %lld particle evaluations fell back to the identity\n",
+                 static_cast<long long>(fs.correction_fallbacks), static_cast<long long>(fs.particle_evaluations));
   fs.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return fs;
 }

@@ -366,7 +366,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
               "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
-              "kernel_correction"});
+              "kernel_correction", "xsph"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -428,6 +428,10 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
     s.damping_end = *damping_end;
   }
   if (auto b = boolean(*t, "kernel_correction", p)) s.kernel_correction = *b;
+  if (auto x = number(*t, "xsph", p)) {
+    require(*x >= 0 && *x <= 1, *t, "xsph", p, *x, "in [0, 1] (0 = off; Monaghan 1989 uses 0.5)");
+    s.xsph = *x;
+  }
 }
 
 // ---- materials (docs/scene.md "Materials"; issue #3) -------------------------

@@ -54,13 +54,15 @@ std::string number(double v) {
 struct FieldKind {
   bool vector = false;   // stored N x Dim
   bool integer = false;  // stored as int32
+  bool matrix = false;   // stored N x Dim x Dim (S, dS/dt), even in 1-D
 };
 FieldKind field_kind(const std::string& name) {
   using S = ParticleStore<3>;
   for (const auto& f : field_table<3>()) {
     if (f.name != name) continue;
     return {std::holds_alternative<std::vector<Vec<3>> S::*>(f.member),
-            std::holds_alternative<std::vector<std::int32_t> S::*>(f.member)};
+            std::holds_alternative<std::vector<std::int32_t> S::*>(f.member),
+            std::holds_alternative<std::vector<Mat<3>> S::*>(f.member)};
   }
   return {};
 }
@@ -136,6 +138,9 @@ std::string XdmfWriter::xml() const {
       if (kind.vector) {  // N x Dim, even in 1-D
         type = comps == 1 ? "Scalar" : "Vector";
         dims = N + " " + std::to_string(comps);
+      } else if (kind.matrix && dim_ == 1) {  // N x 1 x 1: one value per particle
+        type = "Scalar";
+        dims = N + " 1 1";
       } else if (comps == 1) {
         type = "Scalar";
         dims = N;

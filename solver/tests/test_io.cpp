@@ -479,6 +479,20 @@ TEST(Xdmf, TemporalCollection3D) {
   check_xdmf<3>(dir);
 }
 
+// The deviatoric stress is stored N x Dim x Dim in every dimension; the XDMF
+// DataItem must name the same shape (N 1 1 in 1-D), or readers reject it.
+TEST(Xdmf, StressShapeMatchesTheDataset) {
+  for (int d = 1; d <= 3; ++d) {
+    XdmfWriter w("s.xdmf", d);
+    w.add_snapshot("s.0000.h5", 0.0, 7, {{"x", d}, {"S", d * d}});
+    const std::string xml = w.xml();
+    const std::size_t a = xml.find(R"(<Attribute Name="S")");
+    ASSERT_NE(a, std::string::npos) << d;
+    const std::string dims = d == 1 ? "7 1 1" : "7 " + std::to_string(d) + " " + std::to_string(d);
+    EXPECT_NE(xml.find("Dimensions=\"" + dims + "\"", a), std::string::npos) << d << "\n" << xml;
+  }
+}
+
 TEST(Xdmf, Errors) {
   EXPECT_THROW(XdmfWriter("a.xdmf", 4), std::invalid_argument);
   XdmfWriter w("a.xdmf", 3);

@@ -132,3 +132,32 @@ TEST(SolidRun, BoundaryBodiesFollowTheScene) {
   bad.replace(bad.find("boundary = \"fixed\"\n"), 19, "boundary = \"fixed\"\nvelocity = [1.0, 0.0]\n");
   EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", bad), "t.toml"), InputError);
 }
+
+// Kernel-gradient correction through a run (issue #4 item 2): a block at rest
+// stays at rest with the correction on, no particle of a filled block falls
+// back, and a lone particle (correction matrix 0) falls back at every
+// evaluation and is counted.
+TEST(SolidRun, KernelCorrectionRunsAndCountsFallbacks) {
+  const std::string corr = "kernel_correction = true\n";
+  std::string sc = block_scene("shear_modulus = 0.22");
+  sc.insert(sc.find("\n[materials"), "\n" + corr);
+  const FinalState block = run_scene(parse_scene(sc, "t.toml"), RunOptions{"", false, false, true});
+  double vmax = 0;
+  for (double v : block.v) vmax = std::max(vmax, std::fabs(v));
+  EXPECT_LT(vmax, 1e-12);
+  EXPECT_GT(block.particle_evaluations, 0);
+  EXPECT_EQ(block.correction_fallbacks, 0);
+
+  const std::string lone =
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [5.0, 5.0]\nmax = [5.1, 5.1]\nspacing = 0.1\n"
+      "density = 1.0\ninternal_energy = 0.0\n";
+  std::string sc2 = block_scene("shear_modulus = 0.22", lone);
+  sc2.insert(sc2.find("\n[materials"), "\n" + corr);
+  const Scene s2 = parse_scene(sc2, "t.toml");
+  const FinalState with_lone = run_scene(s2, RunOptions{"", false, false, true});
+  const std::int64_t n = std::int64_t(with_lone.m.size());
+  ASSERT_GT(n, 0);
+  const std::int64_t evaluations = with_lone.particle_evaluations / n;
+  EXPECT_GT(evaluations, 1);
+  EXPECT_EQ(with_lone.correction_fallbacks, evaluations);  // the lone particle, every time
+}

@@ -33,6 +33,11 @@ struct FinalState {
   double wall_seconds = 0;
   std::vector<double> x, v;
   std::vector<double> m, rho, p, u, h, cs;
+  // Kernel-gradient correction (solids, simulation.kernel_correction):
+  // particle evaluations where the correction matrix was ill-conditioned and
+  // the identity was used, out of all particle evaluations of the run.
+  std::int64_t correction_fallbacks = 0;
+  std::int64_t particle_evaluations = 0;
 };
 
 // Run the scene to its end time. Throws InputError for bad input found while

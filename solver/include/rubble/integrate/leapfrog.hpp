@@ -5,7 +5,7 @@
 // costs one evaluation of the right-hand side.
 //
 //   v_{1/2} = v_n + dt/2 a_n          (likewise u, rho with continuity density, and S for solids)
-//   x_{n+1} = x_n + dt v_{1/2}
+//   x_{n+1} = x_n + dt v_{1/2}    (+ dt dv_XSPH,n with XSPH, xsph.hpp)
 //   evaluate a_{n+1} at x_{n+1} (with v, u predicted to t_{n+1} for the viscosity)
 //   v_{n+1} = v_{1/2} + dt/2 a_{n+1}
 #include <cstddef>
@@ -31,7 +31,9 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
     u_half[i] = ps.u[i] + half * ps.dudt[i];
     if (evolve_rho) rho_half[i] = ps.rho[i] + half * ps.drhodt[i];
     if (evolve_S) S_half[i] = ps.S[i] + half * ps.dSdt[i];
-    ps.x[i] = sys.domain().wrap(ps.x[i] + dt * v_half[i]);
+    // XSPH (when on) adds its correction, evaluated at the start of the step
+    const Vec<D> xsph = ps.xsph_v.empty() ? Vec<D>::zero() : ps.xsph_v[i];
+    ps.x[i] = sys.domain().wrap(ps.x[i] + dt * (v_half[i] + xsph));
     // predicted end-of-step values, used only inside the evaluation
     ps.v[i] = v_half[i] + half * ps.dvdt[i];
     ps.u[i] = u_half[i] + half * ps.dudt[i];

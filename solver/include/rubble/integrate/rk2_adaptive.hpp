@@ -39,12 +39,14 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
   const bool evolve_S = !ps.dSdt.empty();  // solids
   const ParticleStore<D> y0 = ps;  // state and k1 (its rates)
   int rejections = 0;
+  // dx/dt: v, plus the XSPH correction when the run uses it
+  const auto xdot = [](const ParticleStore<D>& y, std::size_t i) { return position_rate(y, i); };
 
   for (;;) {
     // stage 2: y_n + dt k1
 #pragma omp parallel for if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
-      ps.x[i] = sys.domain().wrap(y0.x[i] + dt * y0.v[i]);
+      ps.x[i] = sys.domain().wrap(y0.x[i] + dt * xdot(y0, i));
       ps.v[i] = y0.v[i] + dt * y0.dvdt[i];
       ps.u[i] = y0.u[i] + dt * y0.dudt[i];
       if (evolve_rho) ps.rho[i] = y0.rho[i] + dt * y0.drhodt[i];
@@ -57,7 +59,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
     const Real q = Real(0.25) * dt;
 #pragma omp parallel for if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
-      ps.x[i] = sys.domain().wrap(y0.x[i] + q * (y0.v[i] + y1.v[i]));
+      ps.x[i] = sys.domain().wrap(y0.x[i] + q * (xdot(y0, i) + xdot(y1, i)));
       ps.v[i] = y0.v[i] + q * (y0.dvdt[i] + y1.dvdt[i]);
       ps.u[i] = y0.u[i] + q * (y0.dudt[i] + y1.dudt[i]);
       if (evolve_rho) ps.rho[i] = y0.rho[i] + q * (y0.drhodt[i] + y1.drhodt[i]);
@@ -72,7 +74,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
     ParticleStore<D>& k3 = ps;
 #pragma omp parallel for reduction(max : err) if (n > 4096)
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec<D> dx = c23 * (Real(0.5) * (y0.v[i] + y1.v[i]) - k3.v[i]);
+      const Vec<D> dx = c23 * (Real(0.5) * (xdot(y0, i) + xdot(y1, i)) - xdot(k3, i));
       const Vec<D> dv = c23 * (Real(0.5) * (y0.dvdt[i] + y1.dvdt[i]) - k3.dvdt[i]);
       const Real du = c23 * (Real(0.5) * (y0.dudt[i] + y1.dudt[i]) - k3.dudt[i]);
       Real e = std::max(norm(dx) / y0.h[i], norm(dv) / (norm(y0.v[i]) + y0.cs[i] + Real(1e-300)));
@@ -95,7 +97,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       const Real h2 = Real(0.5) * dt;
 #pragma omp parallel for if (n > 4096)
       for (std::size_t i = 0; i < n; ++i) {
-        ps.x[i] = sys.domain().wrap(y0.x[i] + h2 * (y0.v[i] + y1.v[i]));
+        ps.x[i] = sys.domain().wrap(y0.x[i] + h2 * (xdot(y0, i) + xdot(y1, i)));
         ps.v[i] = y0.v[i] + h2 * (y0.dvdt[i] + y1.dvdt[i]);
         ps.u[i] = y0.u[i] + h2 * (y0.dudt[i] + y1.dudt[i]);
         if (evolve_rho) ps.rho[i] = y0.rho[i] + h2 * (y0.drhodt[i] + y1.drhodt[i]);

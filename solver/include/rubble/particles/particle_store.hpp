@@ -28,6 +28,7 @@ struct FieldNeeds {
   bool gravity = false;             // self-gravity: a_grav and phi are stored
   bool solid = false;               // a material has strength: S and dSdt are stored
   bool boundary = false;            // a body is made of boundary particles
+  bool xsph = false;                // XSPH: the position-rate correction is stored
 };
 
 template <int D>
@@ -68,6 +69,9 @@ struct ParticleStore {
   // 1 = fixed or moving with its body's prescribed velocity (not integrated)
   std::vector<std::int32_t> boundary;
 
+  // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
+  std::vector<Vec<D>> xsph_v;  // [m/s]
+
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
   void permute(const std::vector<std::uint32_t>& perm);
@@ -93,6 +97,13 @@ struct FieldInfo {
   bool snapshot;  // written to snapshots when allocated
 };
 
+// dx/dt of particle i: its velocity, plus the XSPH correction when the run
+// uses XSPH (physics/xsph.hpp). Both integrators drift with this.
+template <int D>
+inline Vec<D> position_rate(const ParticleStore<D>& ps, std::size_t i) {
+  return ps.xsph_v.empty() ? ps.v[i] : ps.v[i] + ps.xsph_v[i];
+}
+
 template <int D>
 inline const std::vector<FieldInfo<D>>& field_table() {
   using PS = ParticleStore<D>;
@@ -116,6 +127,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"S", &PS::S, "Pa", FieldRole::Evolved, true},
       {"dSdt", &PS::dSdt, "Pa/s", FieldRole::Rate, false},
       {"boundary", &PS::boundary, "1", FieldRole::Constant, true},
+      {"xsph_v", &PS::xsph_v, "m/s", FieldRole::Derived, false},
   };
   return table;
 }
@@ -150,6 +162,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
     dSdt.assign(n, Mat<D>::zero());
   }
   if (needs.boundary) boundary.assign(n, 0);
+  if (needs.xsph) xsph_v.assign(n, Vec<D>::zero());
 }
 
 template <int D>

@@ -38,6 +38,9 @@ struct SimulationConfig {
   // Solids: kernel-gradient correction of the velocity gradient
   // (Randles & Libersky 1996); off by default.
   bool kernel_correction = false;
+  // XSPH (Monaghan 1989): particles drift with v + eps * (smoothed v_b - v_a);
+  // eps in [0, 1], 0 = off (physics/xsph.hpp).
+  double xsph = 0;
 };
 
 struct ArtificialViscosity {
