@@ -233,7 +233,7 @@ std::uint32_t Octree::build_node(std::uint32_t begin, std::uint32_t end, std::ui
   for (int j = 0; j < 6; ++j) nd.quad[j] = quad[j];
   nd.b_max = std::sqrt(b_max);
   nd.eps_max = eps_max;
-  nd.open_radius = opening_radius(side, norm(nd.com - centre), options_.theta);
+  nd.open_radius = opening_radius(side, nd.com - centre, options_.theta);
   nd.skip = std::uint32_t(nodes_.size());
   return id;
 }

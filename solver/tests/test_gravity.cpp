@@ -222,25 +222,50 @@ TEST(GravityMultipole, ErrorFallsWithTheExpectedOrder) {
   }
 }
 
-// The COM-offset criterion: a target inside a cell is never accepted for
-// theta <= 1, wherever the centre of mass sits in the cell.
+// The opening radius 2 B / (sqrt(3) theta), B = |c - farthest cell corner|:
+// s / theta for a centred centre of mass (plain Barnes & Hut), 2 s / theta
+// with it at a corner, growing with the offset along any axis.
+TEST(GravityMultipole, OpeningRadiusFromTheFarthestCellCorner) {
+  const double s = 2.0;
+  for (double theta : {0.3, 0.5, 0.7, 1.0}) {
+    EXPECT_NEAR(opening_radius(Real(s), Vec<3>::zero(), Real(theta)), s / theta, 1e-12 * s / theta);
+    EXPECT_NEAR(opening_radius(Real(s), vec(1, -1, 1), Real(theta)), 2 * s / theta, 1e-12 * s / theta);
+    // offset (0.3, 0, 0): B^2 = (1.3)^2 + 1 + 1
+    EXPECT_NEAR(opening_radius(Real(s), vec(0.3, 0, 0), Real(theta)),
+                2 / std::sqrt(3.0) * std::sqrt(1.69 + 2.0) / theta, 1e-12 * s / theta);
+    double prev = 0;
+    for (double o : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+      const double r = opening_radius(Real(s), vec(0, -o, 0), Real(theta));
+      EXPECT_GT(r, prev);
+      prev = r;
+    }
+  }
+}
+
+// A target inside a cell is never accepted for theta <= 1, wherever the
+// centre of mass sits in the cell (it is at most B from it).
 TEST(GravityMultipole, CriterionNeverAcceptsACellForAPointInsideIt) {
   const double s = 1.0;
   for (double theta : {0.3, 0.7, 1.0}) {
-    // COM at a corner, target at the opposite corner: d = sqrt(3) s, delta = sqrt(3)/2 s
-    const double d = std::sqrt(3.0) * s, delta = std::sqrt(3.0) / 2 * s;
-    EXPECT_FALSE(node_accepted(Real(d * d), opening_radius(Real(s), Real(delta), Real(theta)), 0, 0, 0));
-    // the plain s/d < theta criterion would accept it for theta > 1/sqrt(3)
+    for (const Vec<3>& off : {vec(0.5, 0.5, 0.5), vec(0.5, 0, 0), vec(0.2, -0.4, 0.1), vec(0, 0, 0)}) {
+      // the target at the corner farthest from the centre of mass: d = B
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) d2 += (0.5 * s + std::fabs(off[k])) * (0.5 * s + std::fabs(off[k]));
+      EXPECT_FALSE(node_accepted(Real(d2), opening_radius(Real(s), off, Real(theta)), 0, 0, 0));
+    }
+    // COM at a corner, target at the opposite corner: the plain s/d < theta
+    // criterion would accept it for theta > 1/sqrt(3)
     if (theta > 1 / std::sqrt(3.0)) {
-      EXPECT_TRUE(d > s / theta);
+      EXPECT_TRUE(std::sqrt(3.0) * s > s / theta);
     }
   }
   // theta = 0 never accepts
-  EXPECT_FALSE(node_accepted(Real(1e30), opening_radius(1, 0, 0), 0, 0, 0));
+  EXPECT_FALSE(node_accepted(Real(1e30), opening_radius(1, Vec<3>::zero(), 0), 0, 0, 0));
   // softening: not accepted until the target clears b_max + eps
-  EXPECT_FALSE(node_accepted(Real(4.0), opening_radius(Real(0.1), 0, Real(0.5)), Real(1.0), Real(1.5), 0));
-  EXPECT_TRUE(node_accepted(Real(6.3), opening_radius(Real(0.1), 0, Real(0.5)), Real(1.0), Real(1.5), 0));
-  EXPECT_FALSE(node_accepted(Real(6.3), opening_radius(Real(0.1), 0, Real(0.5)), Real(1.0), Real(0.1), Real(1.6)));
+  const Real r_open = opening_radius(Real(0.1), Vec<3>::zero(), Real(0.5));
+  EXPECT_FALSE(node_accepted(Real(4.0), r_open, Real(1.0), Real(1.5), 0));
+  EXPECT_TRUE(node_accepted(Real(6.3), r_open, Real(1.0), Real(1.5), 0));
+  EXPECT_FALSE(node_accepted(Real(6.3), r_open, Real(1.0), Real(0.1), Real(1.6)));
 }
 
 // ---- direct summation ----------------------------------------------------------

@@ -19,7 +19,8 @@
 // Every node carries its mass, centre of mass, traceless quadrupole about
 // it (parallel-axis sums of its children's), the radius b_max around the
 // centre of mass that holds all its particles, the largest softening length
-// eps_max of its particles, and its opening radius s/theta + delta
+// eps_max of its particles, and its opening radius 2 B / (sqrt(3) theta),
+// B the distance from the centre of mass to the cell's farthest corner
 // (physics/gravity.hpp). The walk accepts a node's multipole when
 // node_accepted() holds and otherwise opens it; at a leaf it sums the
 // softened pair interactions of its particles (the same function as direct
@@ -43,7 +44,7 @@ struct OctreeNode {
   Vec<3> com;           // centre of mass
   Real mass;            // total mass
   Real quad[6];         // traceless quadrupole about com (xx, xy, xz, yy, yz, zz)
-  Real open_radius;     // s/theta + delta (infinite for theta = 0)
+  Real open_radius;     // 2 B / (sqrt(3) theta), B = |com - farthest cell corner| (infinite for theta = 0)
   Real b_max;           // max |x_i - com| over the node's particles
   Real eps_max;         // largest softening length in the node
   std::uint32_t begin;  // sorted particle range [begin, end)

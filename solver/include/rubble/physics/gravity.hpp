@@ -44,19 +44,31 @@
 // only; the error of the quadrupole expansion falls as (size/|r|)^3.
 //
 // ---- Opening criterion --------------------------------------------------------
-// A node of side s (its largest cell side), centre of mass c at distance
-// delta from the geometric centre of its cell, and all its particles within
+// A node whose octree cell (a cube of side s) has its centre of mass c at
+// offset delta = c - (cell centre), and all of whose particles lie within
 // b_max of c, is accepted (its multipole used) for a target at x when
-//     |x - c| > s / theta + delta                  (Barnes 1994; Salmon & Warren 1994)
-// and |x - c| > b_max + max(eps_target, eps_max of the node), which puts
-// every pair beyond both softening lengths, where the kernel-softened
-// interaction is exactly Newtonian: the tree and direct summation then
-// compute the same softened forces, up to the truncation of the multipole
-// expansion. The plain s/d < theta of Barnes & Hut (1986) can accept a cell
-// whose centre of mass sits near a corner for a target inside that very
-// cell (unbounded errors, Salmon & Warren 1994); the delta term prevents it:
-// for theta <= 1 a point inside a cell is never far enough from its centre
-// of mass. theta = 0 opens every node: the walk is then direct summation.
+//     |x - c| > r_open = 2 B / (sqrt(3) theta),   B = |c - farthest cell corner|
+//                      = sqrt(Σ_k (s/2 + |delta_k|)^2)
+// (the opening radius of PKDGRAV and GASOLINE, Stadel 2001, Wadsley, Stadel
+// & Quinn 2004, and of ChaNGa, Jetley et al. 2008, with B to the corner of
+// the node's box, here its octree cell: Salmon & Warren's 1994 b_max taken
+// over the whole cell, the farthest any of its mass could be from c), and
+//     |x - c| > b_max + max(eps_target, eps_max of the node),
+// which puts every pair beyond both softening lengths, where the
+// kernel-softened interaction is exactly Newtonian: the tree and direct
+// summation then compute the same softened forces, up to the truncation of
+// the multipole expansion. For a centred c (delta = 0) B = sqrt(3) s / 2 and
+// r_open = s / theta: the plain s/d < theta of Barnes & Hut (1986), so theta
+// keeps its usual meaning; an off-centre c enlarges r_open, to first order,
+// by (2/3) |delta| / theta (offset along an axis) to (2/sqrt(3)) |delta| /
+// theta (along a diagonal), up to 2 s / theta with c at a corner, where the
+// earlier d > s/theta + delta (Barnes 1994) adds only |delta|. The plain
+// s/d < theta can accept a cell whose centre of mass sits near a corner for
+// a target inside that very cell (unbounded errors, Salmon & Warren 1994);
+// here a point inside a cell is at most B from c, so it is never accepted
+// for theta < 2/sqrt(3). theta = 0 opens every node: the walk is then direct
+// summation. Measured against the alternatives in docs/physics.md
+// (Self-gravity, Choice of criterion).
 #include <cmath>
 
 #include "rubble/core/hd.hpp"
@@ -238,10 +250,19 @@ RUBBLE_HD_INLINE void multipole_add(const Vec<3>& r, Real mass, const Real q[6],
 }
 
 // Radius beyond which a node's multipole may be used (first condition of
-// the criterion above): s / theta + delta; infinite for theta = 0.
-RUBBLE_HD_INLINE Real opening_radius(Real side, Real com_offset, Real theta) {
+// the criterion above) for a cubic cell of side `side` whose centre of mass
+// sits at `com_offset` from the cell centre: 2 B / (sqrt(3) theta) with B
+// the distance from the centre of mass to the farthest cell corner;
+// infinite for theta = 0.
+RUBBLE_HD_INLINE Real opening_radius(Real side, const Vec<3>& com_offset, Real theta) {
   if (!(theta > Real(0))) return Real(INFINITY);
-  return side / theta + com_offset;
+  Real b2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Real e = Real(0.5) * side + std::fabs(com_offset[k]);
+    b2 += e * e;
+  }
+  // 2 / sqrt(3)
+  return Real(1.1547005383792515) * std::sqrt(b2) / theta;
 }
 
 // The whole acceptance test for a target at squared distance d2 from the
