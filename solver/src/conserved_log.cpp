@@ -63,30 +63,25 @@ void ConservedLog::append(const ConservedRecord& r) {
 
 template <int D>
 ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt) {
+  const StoreView<D> s = const_cast<ParticleStore<D>&>(ps).view();  // read only
+  ConservedSums sum;
+  for (std::size_t i = 0; i < ps.n; ++i) sum = sum + conserved_particle<D>(s, i);
+  return conserved_record(sum, time, step, dt);
+}
+
+ConservedRecord conserved_record(const ConservedSums& sum, double time, std::int64_t step, double dt) {
   ConservedRecord r;
   r.time = time;
   r.step = step;
   r.dt = dt;
-  const bool has_u = !ps.u.empty();
-  const bool has_phi = !ps.phi.empty();  // self-gravity on
-  for (std::size_t i = 0; i < ps.n; ++i) {
-    const double m = ps.m[i];
-    double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
-    for (int k = 0; k < D; ++k) {
-      x[k] = ps.x[i][k];
-      v[k] = ps.v[i][k];
-    }
-    r.mass += m;
-    for (int k = 0; k < 3; ++k) r.momentum[k] += m * v[k];
-    // L = m x cross v; with the missing axes zero this gives L_z alone in
-    // 2-D and nothing in 1-D.
-    r.angular_momentum[0] += m * (x[1] * v[2] - x[2] * v[1]);
-    r.angular_momentum[1] += m * (x[2] * v[0] - x[0] * v[2]);
-    r.angular_momentum[2] += m * (x[0] * v[1] - x[1] * v[0]);
-    r.kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (has_u) r.internal += m * ps.u[i];
-    if (has_phi) r.gravitational += 0.5 * m * double(ps.phi[i]);
+  r.mass = sum.mass;
+  for (int k = 0; k < 3; ++k) {
+    r.momentum[k] = sum.momentum[k];
+    r.angular_momentum[k] = sum.angular_momentum[k];
   }
+  r.kinetic = sum.kinetic;
+  r.internal = sum.internal;
+  r.gravitational = sum.gravitational;
   r.total = r.kinetic + r.internal + r.gravitational;
   return r;
 }

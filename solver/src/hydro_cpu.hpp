@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "rubble/core/box.hpp"
+#include "rubble/drivers/material_params.hpp"
+#include "rubble/drivers/particle_rates.hpp"
 #include "rubble/gravity/self_gravity.hpp"
 #include "rubble/neighbors/cell_list.hpp"
 #include "rubble/particles/particle_store.hpp"
@@ -15,19 +17,6 @@
 #include "rubble/scene/scene.hpp"
 
 namespace rubble {
-
-// Per-material coefficients in a device-friendly form.
-struct MaterialParams {
-  EosParams eos;
-  ViscosityParams av;
-  Real alpha_u;  // artificial conductivity (0 = off)
-  Real shear_modulus;  // mu (0 = no strength)
-  Real as_epsilon;     // artificial stress epsilon (0 = off)
-  Real as_exponent;    // artificial stress n (0 = off)
-  Real dp;             // initial particle spacing of the material's bodies
-};
-
-std::vector<MaterialParams> material_params_from_scene(const Scene& scene);
 
 template <int D>
 class HydroCpu {
@@ -40,7 +29,7 @@ class HydroCpu {
   // current state of the store.
   void evaluate();
   // Largest stable time step at the last evaluated state (Courant and force limits).
-  Real dt_limit() const;
+  Real dt_limit();
 
   const Box<D>& domain() const { return domain_; }
   bool summation_density() const { return summation_; }
@@ -56,6 +45,7 @@ class HydroCpu {
   std::int64_t correction_fallbacks_last() const { return fallbacks_last_; }
 
  private:
+  RhsContext<D> context();  // pointers into the store: valid until it is resized
   void build_neighbors(const std::vector<Real>& search_radius);
   void summation_density_and_h();
   void h_from_continuity_density();
@@ -81,7 +71,6 @@ class HydroCpu {
   bool solid_ = false;
   bool kernel_correction_ = false;
   bool artificial_stress_ = false;
-  std::vector<Mat<D>> grad_v_;  // solids: velocity gradient (scratch)
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off

@@ -174,7 +174,8 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
       ps.rho[next] = Real(b.density);
       ps.u[next] = Real(u);
       ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));
-      if (!ps.boundary.empty()) ps.boundary[next] = b.boundary != BoundaryKind::None ? 1 : 0;
+      if (!ps.boundary.empty())
+        ps.boundary[next] = b.boundary == BoundaryKind::None ? 0 : b.boundary_evolving ? 2 : 1;
       for (int k = 0; k < D; ++k)
         if (!std::isfinite(ps.x[next][k]) || !std::isfinite(ps.v[next][k]))
           throw InputError(scene.file, key, "initial position or velocity is not finite");

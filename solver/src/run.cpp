@@ -4,11 +4,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
 
 #include "hydro_cpu.hpp"
+#ifdef RUBBLE_HAVE_CUDA
+#include "cuda/cuda_stepper.hpp"
+#endif
 #include "rubble/core/error.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
@@ -30,19 +34,6 @@
 namespace rubble {
 namespace {
 
-template <int D>
-bool all_finite(const ParticleStore<D>& ps, std::size_t& bad) {
-  for (std::size_t i = 0; i < ps.n; ++i) {
-    bool ok = std::isfinite(ps.u[i]) && std::isfinite(ps.rho[i]) && std::isfinite(ps.h[i]);
-    for (int k = 0; k < D; ++k) ok = ok && std::isfinite(ps.x[i][k]) && std::isfinite(ps.v[i][k]);
-    if (!ok) {
-      bad = i;
-      return false;
-    }
-  }
-  return true;
-}
-
 // Writes snapshots NAME.NNNN.h5, NAME.xdmf and conserved.csv into out_dir.
 template <int D>
 class OutputWriter {
@@ -55,8 +46,9 @@ class OutputWriter {
     log_ = std::make_unique<ConservedLog>((dir_ / "conserved.csv").string(), D);
   }
 
-  void log(const ParticleStore<D>& ps, double t, std::int64_t step, double dt) {
-    if (enabled_) log_->append(measure_conserved<D>(ps, t, step, dt));
+  bool enabled() const { return enabled_; }
+  void log(const ConservedRecord& r) {
+    if (enabled_) log_->append(r);
   }
 
   void snapshot(const ParticleStore<D>& ps, double t, std::int64_t step) {
@@ -102,38 +94,59 @@ void check_periodic_room(const Scene& scene, const Box<D>& domain, const Particl
   }
 }
 
+// The CPU backend behind the time loop's interface (the CUDA one is
+// solver/src/cuda/cuda_stepper.hpp): the particles live in `ps`.
 template <int D>
-FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
-  const auto wall_start = std::chrono::steady_clock::now();
+class CpuStepper {
+ public:
+  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain) : ps_(ps), sys_(scene, ps, domain) {
+    sys_.sort_particles();
+    sys_.evaluate();
+  }
+  void sort_particles() { sys_.sort_particles(); }
+  double dt_limit() { return double(sys_.dt_limit()); }
+  void leapfrog(double dt) { leapfrog_step<D>(sys_, ps_, Real(dt)); }
+  Rk2Result rk2(double dt, double tol, double dt_min) {
+    return rk2_adaptive_step<D>(sys_, ps_, Real(dt), Real(tol), Real(dt_min));
+  }
+  void damp(double f) {
+    const Real fr = Real(f);
+#pragma omp parallel for if (ps_.n > 4096)
+    for (std::size_t i = 0; i < ps_.n; ++i) ps_.v[i] *= fr;
+  }
+  // Index of the first particle with a non-finite state, or n.
+  std::size_t first_non_finite() {
+    const StoreView<D> s = ps_.view();
+    for (std::size_t i = 0; i < ps_.n; ++i)
+      if (!finite_particle<D>(s, i)) return i;
+    return ps_.n;
+  }
+  ConservedRecord conserved(double t, std::int64_t step, double dt) { return measure_conserved<D>(ps_, t, step, dt); }
+  const ParticleStore<D>& host() { return ps_; }  // the state, on the host
+  std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
+  std::int64_t evaluations() const { return sys_.evaluations(); }
+  bool solid() const { return sys_.solid(); }
+  static constexpr const char* name = "cpu";
+
+ private:
+  ParticleStore<D>& ps_;
+  HydroCpu<D> sys_;
+};
+
+template <int D, class Stepper>
+FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
+                    std::chrono::steady_clock::time_point wall_start) {
   const SimulationConfig& sim = scene.simulation;
-  const double hfact = sim.hfact > 0 ? sim.hfact : kernel_default_hfact(sim.kernel);
-
-  FieldNeeds needs;
-  needs.summation_density = sim.density == DensityForm::Summation;
-  needs.continuity_density = sim.density == DensityForm::Continuity;
-  needs.gravity = scene.gravity.mode != GravityMode::Off;
-  for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
-  for (const BodyConfig& b : scene.bodies) needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
-  needs.xsph = sim.xsph > 0;
-  ParticleStore<D> ps;
-  generate_bodies<D>(scene, hfact, needs, ps);
-
-  const Box<D> domain = domain_from_scene<D>(scene);
-  check_periodic_room<D>(scene, domain, ps);
-  HydroCpu<D> sys(scene, ps, domain);
-  sys.sort_particles();
-  sys.evaluate();
-
   OutputWriter<D> out(scene, opt);
   Progress progress(sim.end_time, opt.progress && !opt.quiet);
   const double t_end = sim.end_time;
   const double dt_min = sim.dt_min > 0 ? sim.dt_min : 1e-12 * t_end;
   const double out_interval = scene.output.interval > 0 ? scene.output.interval : t_end;
   double t = 0, next_output = std::min(out_interval, t_end);
-  double dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : double(sys.dt_limit());
+  double dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : sys.dt_limit();
   std::int64_t step = 0;
-  out.snapshot(ps, t, step);
-  out.log(ps, t, step, 0);
+  out.snapshot(sys.host(), t, step);
+  if (out.enabled()) out.log(sys.conserved(t, step, 0));
 
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
   while (t < t_end * (1 - 1e-12)) {
@@ -147,43 +160,41 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
     if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
     if (sim.integrator == Integrator::Leapfrog) {
-      leapfrog_step<D>(sys, ps, Real(dt));
+      sys.leapfrog(dt);
     } else {
       dt = std::min(dt, dt_proposal);
-      const Rk2Result r = rk2_adaptive_step<D>(sys, ps, Real(dt), Real(sim.rk2_tolerance), Real(dt_min));
+      const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
       dt = r.dt_taken;
       dt_proposal = r.dt_next;
     }
     t += dt;
     ++step;
     // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
-    if (damped) {
-      const Real f = Real(std::exp(-dt / sim.damping_time));
-#pragma omp parallel for if (ps.n > 4096)
-      for (std::size_t i = 0; i < ps.n; ++i) ps.v[i] *= f;
-    }
+    if (damped) sys.damp(std::exp(-dt / sim.damping_time));
 
-    std::size_t bad = 0;
-    if (!all_finite(ps, bad)) {
-      out.diagnostic(ps, t, step);
+    const std::size_t bad = sys.first_non_finite();
+    if (bad < sys.host().n) {
+      out.diagnostic(sys.host(), t, step);
       throw RunError("non-finite value in particle " + std::to_string(bad) + " at t = " + std::to_string(t) +
                      " (step " + std::to_string(step) + "); diagnostic snapshot written");
     }
     if (dt < dt_min && t < t_end * (1 - 1e-12) && next_output - t > dt_min) {
-      out.diagnostic(ps, t, step);
+      out.diagnostic(sys.host(), t, step);
       throw RunError("time step collapsed to " + std::to_string(dt) + " < dt_min at t = " + std::to_string(t) +
                      "; diagnostic snapshot written");
     }
-    out.log(ps, t, step, dt);
+    if (out.enabled()) out.log(sys.conserved(t, step, dt));
     progress.update(t, dt, step);
     if (t >= next_output * (1 - 1e-12)) {
-      out.snapshot(ps, t, step);
+      out.snapshot(sys.host(), t, step);
       next_output = std::min(next_output + out_interval, t_end);
     }
   }
   progress.finish();
 
+  const ParticleStore<D>& ps = sys.host();
   FinalState fs;
+  fs.backend = Stepper::name;
   fs.dimension = D;
   fs.time = t;
   fs.steps = step;
@@ -210,7 +221,60 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   return fs;
 }
 
+template <int D>
+FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const SimulationConfig& sim = scene.simulation;
+  const double hfact = sim.hfact > 0 ? sim.hfact : kernel_default_hfact(sim.kernel);
+  if (!backend_built(opt.backend))
+    throw RunError(std::string("backend '") + backend_name(opt.backend) +
+                   "' is not in this build (configure with -DRUBBLE_CUDA=ON on a machine with nvcc)");
+
+  FieldNeeds needs;
+  needs.summation_density = sim.density == DensityForm::Summation;
+  needs.continuity_density = sim.density == DensityForm::Continuity;
+  needs.gravity = scene.gravity.mode != GravityMode::Off;
+  for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
+  for (const BodyConfig& b : scene.bodies) needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
+  needs.xsph = sim.xsph > 0;
+  ParticleStore<D> ps;
+  generate_bodies<D>(scene, hfact, needs, ps);
+
+  const Box<D> domain = domain_from_scene<D>(scene);
+  check_periodic_room<D>(scene, domain, ps);
+#ifdef RUBBLE_HAVE_CUDA
+  if (opt.backend == Backend::Cuda) {
+    CudaStepper<D> sys(scene, ps, domain);
+    return run_loop<D>(scene, opt, sys, wall_start);
+  }
+#endif
+  CpuStepper<D> sys(scene, ps, domain);
+  return run_loop<D>(scene, opt, sys, wall_start);
+}
+
 }  // namespace
+
+const char* backend_name(Backend b) { return b == Backend::Cuda ? "cuda" : "cpu"; }
+
+Backend parse_backend(const std::string& name, const std::string& where) {
+  if (name == "cpu") return Backend::Cpu;
+  if (name == "cuda") return Backend::Cuda;
+  throw InputError(where, "backend", "unknown backend '" + name + "'; expected cpu or cuda");
+}
+
+bool backend_built(Backend b) {
+#ifdef RUBBLE_HAVE_CUDA
+  return true;
+#else
+  return b == Backend::Cpu;
+#endif
+}
+
+Backend default_backend() {
+  const char* env = std::getenv("RUBBLE_BACKEND");
+  if (!env || !*env) return Backend::Cpu;
+  return parse_backend(env, "environment variable RUBBLE_BACKEND");
+}
 
 FinalState run_scene(const Scene& scene, const RunOptions& options) {
   switch (scene.simulation.dimension) {

@@ -759,7 +759,7 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
-                                    "velocity", "boundary"};
+                                    "velocity", "boundary", "boundary_state"};
   if (round) known.insert(known.end(), {"center", "radius"});
   else known.insert(known.end(), {"min", "max"});
   if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
@@ -851,6 +851,12 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
       if (b.velocity[a] != 0)
         fail(p + ".velocity", "a boundary = \"fixed\" body is at rest; use boundary = \"moving\" to prescribe a velocity",
              t.get("velocity"));
+  if (t.contains("boundary_state")) {
+    if (b.boundary == BoundaryKind::None)
+      fail(p + ".boundary_state", "only a boundary body (boundary = \"fixed\" or \"moving\") has a boundary_state",
+           t.get("boundary_state"));
+    b.boundary_evolving = choice(t, "boundary_state", p, false, {{"frozen", false}, {"evolving", true}});
+  }
   return b;
 }
 

@@ -133,6 +133,45 @@ TEST(SolidRun, BoundaryBodiesFollowTheScene) {
   EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", bad), "t.toml"), InputError);
 }
 
+// boundary_state = "evolving" (dynamic boundary particles): the motion is
+// still prescribed, but density, pressure and stress evolve from the
+// neighbours (the clamp of the oscillating-plate rung); "frozen" (the
+// default) keeps the initial state exactly.
+TEST(SolidRun, EvolvingBoundaryStateChangesDensityButNotMotion) {
+  const std::string lid =
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, 1.0]\nmax = [1.0, 1.3]\nspacing = 0.1\n"
+      "density = 1.0\ninternal_energy = 0.0\nboundary = \"moving\"\nvelocity = [0.0, -0.1]\n";
+  for (const bool evolving : {false, true}) {
+    const std::string body = evolving ? lid + "boundary_state = \"evolving\"\n" : lid;
+    const Scene s = parse_scene(block_scene("shear_modulus = 0.22", body), "t.toml");
+    EXPECT_EQ(s.bodies[1].boundary_evolving, evolving);
+    const FinalState fs = run_scene(s, RunOptions{"", false, false, true});
+    int lid_particles = 0, changed = 0;
+    for (std::size_t i = 0; i < fs.m.size(); ++i) {
+      if (fs.x[2 * i + 1] <= 1.0 - 0.05) continue;  // the block; the lid moved down by 0.05
+      ++lid_particles;
+      EXPECT_NEAR(fs.v[2 * i + 1], -0.1, 1e-15);   // motion prescribed either way
+      EXPECT_EQ(fs.v[2 * i], 0.0);
+      if (fs.rho[i] != 1.0) ++changed;
+    }
+    EXPECT_EQ(lid_particles, 30);
+    if (evolving) EXPECT_GE(changed, 10) << "the lid's first row is compressed by the block it moves into";
+    else EXPECT_EQ(changed, 0);
+  }
+  // only a boundary body has a boundary_state, and only these two values
+  EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", lid + "boundary_state = \"melting\"\n"), "t.toml"),
+               InputError);
+  const std::string free_body =
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, 1.0]\nmax = [1.0, 1.3]\nspacing = 0.1\n"
+      "density = 1.0\ninternal_energy = 0.0\nboundary_state = \"evolving\"\n";
+  try {
+    parse_scene(block_scene("shear_modulus = 0.22", free_body), "t.toml");
+    ADD_FAILURE() << "boundary_state on a free body must be an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("boundary_state"), std::string::npos) << e.what();
+  }
+}
+
 // Kernel-gradient correction through a run (issue #4 item 2): a block at rest
 // stays at rest with the correction on, no particle of a filled block falls
 // back, and a lone particle (correction matrix 0) falls back at every

@@ -18,15 +18,32 @@ Scene load_scene_file(const std::string& path, const std::vector<std::string>& o
 Scene parse_scene(const std::string& text, const std::string& file_label,
                   const std::vector<std::string>& overrides = {});
 
+// Where the particles live and the right-hand side is evaluated. `cpu`
+// (OpenMP) is always built; `cuda` only with -DRUBBLE_CUDA=ON.
+enum class Backend { Cpu, Cuda };
+
+// "cpu" / "cuda".
+const char* backend_name(Backend b);
+// Parses "cpu" / "cuda"; throws InputError(where, "backend", ...) otherwise.
+Backend parse_backend(const std::string& name, const std::string& where);
+// Whether this build has the backend (cpu: always).
+bool backend_built(Backend b);
+// The backend of runs that do not name one: RUBBLE_BACKEND from the
+// environment ("cpu" or "cuda"; how the whole ctest ladder runs on a GPU
+// host, ci/gpu/check), cpu when unset.
+Backend default_backend();
+
 struct RunOptions {
   std::string out_dir;        // where snapshots and conserved.csv go
   bool write_output = true;   // false: run in memory only (tests, benchmarks)
   bool progress = false;      // progress bar (terminal) or plain lines
   bool quiet = false;         // no progress output at all
+  Backend backend = default_backend();
 };
 
 // Final particle state, flattened (vector fields N x D, row-major).
 struct FinalState {
+  std::string backend = "cpu";  // the backend that ran it (records name it)
   int dimension = 0;
   double time = 0;
   std::int64_t steps = 0;

@@ -11,43 +11,65 @@
 #include <cstddef>
 #include <vector>
 
+#include "rubble/core/box.hpp"
+#include "rubble/core/hd.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/particles/store_view.hpp"
 
 namespace rubble {
+
+// The half-step values a leapfrog step keeps between its two halves
+// (nullptr for fields the run does not evolve).
+template <int D>
+struct LeapfrogHalf {
+  Vec<D>* v = nullptr;
+  Real* u = nullptr;
+  Real* rho = nullptr;
+  Mat<D>* S = nullptr;
+};
+
+// Second half: v, u (rho, S) from the half step with the new rates.
+template <int D>
+RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>& half_state, std::size_t i, Real dt) {
+  const Real half = Real(0.5) * dt;
+  s.v[i] = half_state.v[i] + half * s.dvdt[i];
+  s.u[i] = half_state.u[i] + half * s.dudt[i];
+  if (half_state.rho) s.rho[i] = half_state.rho[i] + half * s.drhodt[i];
+  if (half_state.S) s.S[i] = half_state.S[i] + half * s.dSdt[i];
+}
+
+// First half of particle i's step: kick to the half step, drift the
+// position (with the XSPH correction when on), and predict the end-of-step
+// values that the evaluation at the new positions uses.
+template <int D>
+RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogHalf<D>& half_state, const Box<D>& domain,
+                                          std::size_t i, Real dt) {
+  const Real half = Real(0.5) * dt;
+  half_state.v[i] = s.v[i] + half * s.dvdt[i];
+  half_state.u[i] = s.u[i] + half * s.dudt[i];
+  if (half_state.rho) half_state.rho[i] = s.rho[i] + half * s.drhodt[i];
+  if (half_state.S) half_state.S[i] = s.S[i] + half * s.dSdt[i];
+  // XSPH (when on) adds its correction, evaluated at the start of the step
+  const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
+  s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
+  leapfrog_kick<D>(s, half_state, i, dt);  // predicted end-of-step values
+}
 
 template <int D, class System>
 void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   const std::size_t n = ps.n;
-  const bool evolve_rho = !ps.drhodt.empty();
-  const bool evolve_S = !ps.dSdt.empty();  // solids: the deviatoric stress
-  const Real half = Real(0.5) * dt;
   std::vector<Vec<D>> v_half(n);
-  std::vector<Real> u_half(n), rho_half(evolve_rho ? n : 0);
-  std::vector<Mat<D>> S_half(evolve_S ? n : 0);
-
+  std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() ? 0 : n);
+  std::vector<Mat<D>> S_half(ps.dSdt.empty() ? 0 : n);  // solids: the deviatoric stress
+  const LeapfrogHalf<D> half{v_half.data(), u_half.data(), rho_half.empty() ? nullptr : rho_half.data(),
+                             S_half.empty() ? nullptr : S_half.data()};
+  const StoreView<D> s = ps.view();
+  const Box<D> domain = sys.domain();
 #pragma omp parallel for if (n > 4096)
-  for (std::size_t i = 0; i < n; ++i) {
-    v_half[i] = ps.v[i] + half * ps.dvdt[i];
-    u_half[i] = ps.u[i] + half * ps.dudt[i];
-    if (evolve_rho) rho_half[i] = ps.rho[i] + half * ps.drhodt[i];
-    if (evolve_S) S_half[i] = ps.S[i] + half * ps.dSdt[i];
-    // XSPH (when on) adds its correction, evaluated at the start of the step
-    const Vec<D> xsph = ps.xsph_v.empty() ? Vec<D>::zero() : ps.xsph_v[i];
-    ps.x[i] = sys.domain().wrap(ps.x[i] + dt * (v_half[i] + xsph));
-    // predicted end-of-step values, used only inside the evaluation
-    ps.v[i] = v_half[i] + half * ps.dvdt[i];
-    ps.u[i] = u_half[i] + half * ps.dudt[i];
-    if (evolve_rho) ps.rho[i] = rho_half[i] + half * ps.drhodt[i];
-    if (evolve_S) ps.S[i] = S_half[i] + half * ps.dSdt[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) leapfrog_kick_drift<D>(s, half, domain, i, dt);
   sys.evaluate();
 #pragma omp parallel for if (n > 4096)
-  for (std::size_t i = 0; i < n; ++i) {
-    ps.v[i] = v_half[i] + half * ps.dvdt[i];
-    ps.u[i] = u_half[i] + half * ps.dudt[i];
-    if (evolve_rho) ps.rho[i] = rho_half[i] + half * ps.drhodt[i];
-    if (evolve_S) ps.S[i] = S_half[i] + half * ps.dSdt[i];
-  }
+  for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
 }
 
 }  // namespace rubble

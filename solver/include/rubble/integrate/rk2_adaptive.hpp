@@ -22,7 +22,10 @@
 #include <cstddef>
 #include <vector>
 
+#include "rubble/core/box.hpp"
+#include "rubble/core/hd.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/particles/store_view.hpp"
 
 namespace rubble {
 
@@ -32,82 +35,100 @@ struct Rk2Result {
   int rejections;
 };
 
+// One particle of a stage: y = y0 + w k_a (kb == nullptr) or
+// y = y0 + w (k_a + k_b), where k_a, k_b are the rates held by the views
+// ka, kb (dx/dt = v plus the XSPH correction when on).
+template <int D>
+RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0, const StoreView<D>& ka,
+                                  const StoreView<D>* kb, Real w, const Box<D>& domain, std::size_t i) {
+  if (!kb) {
+    y.x[i] = domain.wrap(y0.x[i] + w * ka.position_rate(i));
+    y.v[i] = y0.v[i] + w * ka.dvdt[i];
+    y.u[i] = y0.u[i] + w * ka.dudt[i];
+    if (y.drhodt) y.rho[i] = y0.rho[i] + w * ka.drhodt[i];
+    if (y.dSdt) y.S[i] = y0.S[i] + w * ka.dSdt[i];
+    return;
+  }
+  y.x[i] = domain.wrap(y0.x[i] + w * (ka.position_rate(i) + kb->position_rate(i)));
+  y.v[i] = y0.v[i] + w * (ka.dvdt[i] + kb->dvdt[i]);
+  y.u[i] = y0.u[i] + w * (ka.dudt[i] + kb->dudt[i]);
+  if (y.drhodt) y.rho[i] = y0.rho[i] + w * (ka.drhodt[i] + kb->drhodt[i]);
+  if (y.dSdt) y.S[i] = y0.S[i] + w * (ka.dSdt[i] + kb->dSdt[i]);
+}
+
+// The scaled error of particle i: y_heun - y_rk3 = c23 [ (k1 + k2)/2 - k3 ]
+// with c23 = 2 dt / 3, each field over its scale (see above).
+template <int D>
+RUBBLE_HD_INLINE Real rk2_error_particle(const StoreView<D>& y0, const StoreView<D>& y1, const StoreView<D>& k3,
+                                         Real c23, std::size_t i) {
+  const Vec<D> dx = c23 * (Real(0.5) * (y0.position_rate(i) + y1.position_rate(i)) - k3.position_rate(i));
+  const Vec<D> dv = c23 * (Real(0.5) * (y0.dvdt[i] + y1.dvdt[i]) - k3.dvdt[i]);
+  const Real du = c23 * (Real(0.5) * (y0.dudt[i] + y1.dudt[i]) - k3.dudt[i]);
+  const Real ex = norm(dx) / y0.h[i], ev = norm(dv) / (norm(y0.v[i]) + y0.cs[i] + Real(1e-300));
+  Real e = ex > ev ? ex : ev;
+  const Real eu = std::fabs(du) / (std::fabs(y0.u[i]) + y0.cs[i] * y0.cs[i] + Real(1e-300));
+  e = eu > e ? eu : e;
+  if (y0.drhodt) {
+    const Real drho = c23 * (Real(0.5) * (y0.drhodt[i] + y1.drhodt[i]) - k3.drhodt[i]);
+    const Real er = std::fabs(drho) / y0.rho[i];
+    e = er > e ? er : e;
+  }
+  if (y0.dSdt) {
+    const Mat<D> dS = c23 * (Real(0.5) * (y0.dSdt[i] + y1.dSdt[i]) - k3.dSdt[i]);
+    const Real scale = std::sqrt(double_dot(y0.S[i], y0.S[i])) + y0.rho[i] * y0.cs[i] * y0.cs[i] + Real(1e-300);
+    const Real es = std::sqrt(double_dot(dS, dS)) / scale;
+    e = es > e ? es : e;
+  }
+  return e;
+}
+
+// Step-size factor from the error: clamp(0.9 (tol/err)^(1/3), 0.2, 2).
+RUBBLE_HD_INLINE Real rk2_step_factor(Real err, Real tol) {
+  const Real grow = err > 0 ? Real(0.9) * std::cbrt(tol / err) : Real(2);
+  return grow < Real(0.2) ? Real(0.2) : grow > Real(2) ? Real(2) : grow;
+}
+
 template <int D, class System>
 Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol, Real dt_min) {
   const std::size_t n = ps.n;
-  const bool evolve_rho = !ps.drhodt.empty();
-  const bool evolve_S = !ps.dSdt.empty();  // solids
-  const ParticleStore<D> y0 = ps;  // state and k1 (its rates)
+  ParticleStore<D> y0 = ps;  // state and k1 (its rates)
+  ParticleStore<D> y1;
+  const StoreView<D> v0 = y0.view();
+  StoreView<D> y = ps.view();
+  const Box<D> domain = sys.domain();
   int rejections = 0;
-  // dx/dt: v, plus the XSPH correction when the run uses it
-  const auto xdot = [](const ParticleStore<D>& y, std::size_t i) { return position_rate(y, i); };
 
   for (;;) {
     // stage 2: y_n + dt k1
 #pragma omp parallel for if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) {
-      ps.x[i] = sys.domain().wrap(y0.x[i] + dt * xdot(y0, i));
-      ps.v[i] = y0.v[i] + dt * y0.dvdt[i];
-      ps.u[i] = y0.u[i] + dt * y0.dudt[i];
-      if (evolve_rho) ps.rho[i] = y0.rho[i] + dt * y0.drhodt[i];
-      if (evolve_S) ps.S[i] = y0.S[i] + dt * y0.dSdt[i];
-    }
+    for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, nullptr, dt, domain, i);
     sys.evaluate();
-    const ParticleStore<D> y1 = ps;  // k2 = rates of y1
+    y1 = ps;  // k2 = rates of y1
+    const StoreView<D> v1 = y1.view();
 
     // stage 3: y_n + dt/4 (k1 + k2)
     const Real q = Real(0.25) * dt;
 #pragma omp parallel for if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) {
-      ps.x[i] = sys.domain().wrap(y0.x[i] + q * (xdot(y0, i) + xdot(y1, i)));
-      ps.v[i] = y0.v[i] + q * (y0.dvdt[i] + y1.dvdt[i]);
-      ps.u[i] = y0.u[i] + q * (y0.dudt[i] + y1.dudt[i]);
-      if (evolve_rho) ps.rho[i] = y0.rho[i] + q * (y0.drhodt[i] + y1.drhodt[i]);
-      if (evolve_S) ps.S[i] = y0.S[i] + q * (y0.dSdt[i] + y1.dSdt[i]);
-    }
+    for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, q, domain, i);
     sys.evaluate();  // k3 = rates in ps
 
-    // Heun solution and the error against SSP-RK3:
-    // y_heun - y_rk3 = (2/3) dt [ (k1 + k2)/2 - k3 ].
+    // Heun solution and the error against SSP-RK3
     const Real c23 = Real(2) / Real(3) * dt;
     Real err = 0;
-    ParticleStore<D>& k3 = ps;
 #pragma omp parallel for reduction(max : err) if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec<D> dx = c23 * (Real(0.5) * (xdot(y0, i) + xdot(y1, i)) - xdot(k3, i));
-      const Vec<D> dv = c23 * (Real(0.5) * (y0.dvdt[i] + y1.dvdt[i]) - k3.dvdt[i]);
-      const Real du = c23 * (Real(0.5) * (y0.dudt[i] + y1.dudt[i]) - k3.dudt[i]);
-      Real e = std::max(norm(dx) / y0.h[i], norm(dv) / (norm(y0.v[i]) + y0.cs[i] + Real(1e-300)));
-      e = std::max(e, std::fabs(du) / (std::fabs(y0.u[i]) + y0.cs[i] * y0.cs[i] + Real(1e-300)));
-      if (evolve_rho) {
-        const Real drho = c23 * (Real(0.5) * (y0.drhodt[i] + y1.drhodt[i]) - k3.drhodt[i]);
-        e = std::max(e, std::fabs(drho) / y0.rho[i]);
-      }
-      if (evolve_S) {
-        const Mat<D> dS = c23 * (Real(0.5) * (y0.dSdt[i] + y1.dSdt[i]) - k3.dSdt[i]);
-        const Real scale = std::sqrt(double_dot(y0.S[i], y0.S[i])) + y0.rho[i] * y0.cs[i] * y0.cs[i] + Real(1e-300);
-        e = std::max(e, std::sqrt(double_dot(dS, dS)) / scale);
-      }
-      err = std::max(err, e);
-    }
+    for (std::size_t i = 0; i < n; ++i) err = std::max(err, rk2_error_particle<D>(v0, v1, y, c23, i));
 
-    const Real grow = err > 0 ? Real(0.9) * std::cbrt(tol / err) : Real(2);
-    const Real factor = std::clamp(grow, Real(0.2), Real(2));
+    const Real factor = rk2_step_factor(err, tol);
     if (err <= tol || dt <= dt_min) {
       const Real h2 = Real(0.5) * dt;
 #pragma omp parallel for if (n > 4096)
-      for (std::size_t i = 0; i < n; ++i) {
-        ps.x[i] = sys.domain().wrap(y0.x[i] + h2 * (xdot(y0, i) + xdot(y1, i)));
-        ps.v[i] = y0.v[i] + h2 * (y0.dvdt[i] + y1.dvdt[i]);
-        ps.u[i] = y0.u[i] + h2 * (y0.dudt[i] + y1.dudt[i]);
-        if (evolve_rho) ps.rho[i] = y0.rho[i] + h2 * (y0.drhodt[i] + y1.drhodt[i]);
-        if (evolve_S) ps.S[i] = y0.S[i] + h2 * (y0.dSdt[i] + y1.dSdt[i]);
-      }
+      for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, h2, domain, i);
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};
     }
     // rejected: back to y_n with a smaller step
     ps = y0;
+    y = ps.view();
     dt = std::max(dt * factor, dt_min);
     ++rejections;
   }

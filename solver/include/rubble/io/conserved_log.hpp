@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "rubble/io/conserved_sums.hpp"
 #include "rubble/particles/particle_store.hpp"
 
 namespace rubble {
@@ -53,5 +54,7 @@ class ConservedLog {
 // Sums run in double whatever Real is.
 template <int D>
 ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt);
+// The record of summed terms (conserved_sums.hpp); total = kinetic + internal + gravitational.
+ConservedRecord conserved_record(const ConservedSums& sum, double time, std::int64_t step, double dt);
 
 }  // namespace rubble

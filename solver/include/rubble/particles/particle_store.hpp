@@ -17,6 +17,7 @@
 #include "rubble/core/mat.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/core/vec.hpp"
+#include "rubble/particles/store_view.hpp"
 
 namespace rubble {
 
@@ -66,7 +67,8 @@ struct ParticleStore {
   std::vector<Mat<D>> dSdt;  // [Pa/s]
 
   // boundary particles (allocated only when a body is a boundary): 0 = free,
-  // 1 = fixed or moving with its body's prescribed velocity (not integrated)
+  // 1 = fixed or moving with its body's prescribed velocity, state frozen
+  // (not integrated); 2 = the same motion, state (rho, u, S) evolving
   std::vector<std::int32_t> boundary;
 
   // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
@@ -76,6 +78,8 @@ struct ParticleStore {
   // Apply a permutation: new particle i is old particle perm[i].
   void permute(const std::vector<std::uint32_t>& perm);
   std::vector<std::string> allocated_fields() const;
+  // The allocated fields as plain pointers (rubble/particles/store_view.hpp).
+  StoreView<D> view();
 };
 
 // ---- the field table -----------------------------------------------------
@@ -185,6 +189,22 @@ std::vector<std::string> ParticleStore<D>::allocated_fields() const {
   for (const auto& f : field_table<D>())
     std::visit([&](auto member) { if (!(this->*member).empty()) names.emplace_back(f.name); }, f.member);
   return names;
+}
+
+}  // namespace rubble
+
+namespace rubble {
+
+template <int D>
+StoreView<D> ParticleStore<D>::view() {
+  StoreView<D> s;
+  s.n = n;
+  for (const auto& f : field_table<D>())
+    std::visit([&](auto member) {
+      auto& arr = this->*member;
+      if (!arr.empty()) s.bind(f.name, arr.data());
+    }, f.member);
+  return s;
 }
 
 }  // namespace rubble

@@ -128,6 +128,11 @@ struct BodyConfig {
   double internal_energy = -1;  // [J/kg]
   std::array<double, 3> velocity{};  // [m/s]
   BoundaryKind boundary = BoundaryKind::None;
+  // boundary_state = "evolving": the boundary particles' density, internal
+  // energy and stress evolve like any particle's, only their motion is
+  // prescribed (dynamic boundary particles, Crespo et al. 2007; a clamp
+  // that carries stress). "frozen" (default): they keep their initial state.
+  bool boundary_evolving = false;
   // shape = "polytrope" (3-D only): a self-gravitating polytrope in
   // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
   // solution; K follows from radius, mass, n and gravity.G. The parser

@@ -1,0 +1,27 @@
+#pragma once
+// Per-material coefficients in a device-friendly form (plain data, copied to
+// the GPU as an array indexed by material_id).
+#include <vector>
+
+#include "rubble/core/real.hpp"
+#include "rubble/physics/artificial_viscosity.hpp"
+#include "rubble/physics/eos/eos.hpp"
+
+namespace rubble {
+
+struct Scene;
+
+struct MaterialParams {
+  EosParams eos;
+  ViscosityParams av;
+  Real alpha_u;        // artificial conductivity (0 = off)
+  Real shear_modulus;  // mu (0 = no strength)
+  Real as_epsilon;     // artificial stress epsilon (0 = off)
+  Real as_exponent;    // artificial stress n (0 = off)
+  Real dp;             // initial particle spacing of the material's bodies
+};
+
+// One entry per scene material, in material_id order (hydro_cpu.cpp).
+std::vector<MaterialParams> material_params_from_scene(const Scene& scene);
+
+}  // namespace rubble

@@ -1,0 +1,256 @@
+#pragma once
+// The loop bodies of the right-hand side, one particle at a time, shared by
+// the CPU (OpenMP) and CUDA drivers (DESIGN.md principles 1 and 6). Each
+// function works on particle `a` of a StoreView and sums over its
+// neighbours through `each`, a callable that calls f(b) for every candidate
+// neighbour b != a: the CPU passes the neighbour lists, the GPU its cell
+// list. A candidate may lie beyond the support; every pair function below
+// treats such a pair as absent (its terms are zero), so the two backends
+// see the same pairs. The formulas themselves live in rubble/physics/.
+#include <cstdint>
+
+#include "rubble/core/box.hpp"
+#include "rubble/core/hd.hpp"
+#include "rubble/drivers/material_params.hpp"
+#include "rubble/particles/store_view.hpp"
+#include "rubble/physics/artificial_stress.hpp"
+#include "rubble/physics/hydro.hpp"
+#include "rubble/physics/jaumann_rate.hpp"
+#include "rubble/physics/kernel_gradient_correction.hpp"
+#include "rubble/physics/kernels.hpp"
+#include "rubble/physics/smoothing_length.hpp"
+#include "rubble/physics/solid.hpp"
+#include "rubble/physics/timestep.hpp"
+#include "rubble/physics/xsph.hpp"
+
+namespace rubble {
+
+// What is fixed over one evaluation of the right-hand side.
+template <int D>
+struct RhsContext {
+  StoreView<D> s;
+  const MaterialParams* mat = nullptr;  // indexed by material_id
+  Box<D> domain;
+  KernelType kernel = KernelType::CubicSpline;
+  Real hfact = 0;
+  bool summation = false;          // summation density (grad-h terms) or continuity
+  bool kernel_correction = false;  // solids: corrected velocity gradient
+  Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
+  Real xsph_epsilon = 0;
+  Real courant = 0, force_factor = 0;
+};
+
+// Condition limit of the kernel-gradient correction matrix
+// (kernel_gradient_correction.hpp): below it the identity is used.
+constexpr Real kCorrectionMinDet = Real(1e-3);
+
+// ---- density -------------------------------------------------------------
+
+struct DensitySums {
+  Real rho, dwdh;  // sum_b m_b W_ab(h), sum_b m_b dW_ab/dh (self included)
+};
+
+template <int D, class Each>
+RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t a, Real h, Each&& each) {
+  const StoreView<D>& s = c.s;
+  DensitySums out{s.m[a] * kernel_w<D>(c.kernel, Real(0), h), s.m[a] * kernel_dwdh<D>(c.kernel, Real(0), h)};
+  each([&](std::uint32_t b) {
+    const Real r = norm(c.domain.separation(s.x[a], s.x[b]));
+    if (r >= h) return;
+    out.rho += s.m[b] * kernel_w<D>(c.kernel, r, h);
+    out.dwdh += s.m[b] * kernel_dwdh<D>(c.kernel, r, h);
+  });
+  return out;
+}
+
+// Summation density with h and rho solved together by Newton's method
+// (smoothing_length.hpp), starting from the stored h. Writes h, rho and
+// Omega of particle a and returns true, or, when h grows past the search
+// radius (the neighbours listed do not cover the new support), writes only
+// the grown h and returns false: the driver then rebuilds with a larger radius.
+template <int D, class Each>
+RUBBLE_HD_INLINE bool summation_density_particle(const RhsContext<D>& c, std::uint32_t a, Real search_radius,
+                                                 Each&& each) {
+  const StoreView<D>& s = c.s;
+  constexpr int kMaxNewton = 50;
+  const Real tol = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  Real h = s.h[a] < search_radius ? s.h[a] : search_radius;
+  bool converged = false;
+  for (int it = 0; it < kMaxNewton && !converged; ++it) {
+    const DensitySums d = density_sums<D>(c, a, h, each);
+    const Real h_new = newton_h_step<D>(h, d.rho, d.dwdh, c.hfact, s.m[a]);
+    converged = std::fabs(h_new - h) <= tol * h;
+    h = h_new;
+    if (h > search_radius) break;  // needs more neighbours than listed
+  }
+  s.h[a] = h;
+  if (h > search_radius) return false;
+  const DensitySums d = density_sums<D>(c, a, h, each);  // density and Omega at the converged h
+  s.rho[a] = d.rho;
+  s.omega[a] = grad_h_omega<D>(h, d.rho, d.dwdh);
+  return true;
+}
+
+// Continuity density: h follows the evolved density.
+template <int D>
+RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint32_t a) {
+  c.s.h[a] = h_from_density<D>(c.hfact, c.s.m[a], c.s.rho[a]);
+}
+
+// Pressure and sound speed from the material's equation of state.
+template <int D>
+RUBBLE_HD_INLINE void eos_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const EosState e = eos_evaluate(c.mat[c.s.material_id[a]].eos, c.s.rho[a], c.s.u[a]);
+  c.s.p[a] = e.p;
+  c.s.cs[a] = std::sqrt(e.c2 > Real(0) ? e.c2 : Real(0));
+}
+
+// ---- feature set Hydro ---------------------------------------------------
+
+template <int D>
+RUBBLE_HD_INLINE HydroParticle<D> hydro_particle(const RhsContext<D>& c, std::uint32_t i) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[i]];
+  return HydroParticle<D>{s.x[i], s.v[i], s.m[i],  s.rho[i], s.p[i], s.u[i], s.h[i],
+                          c.summation ? s.omega[i] : Real(1), s.cs[i], mat.av, mat.alpha_u};
+}
+
+// Pressure, viscosity and conductivity: dv/dt, du/dt, (drho/dt), mu_max.
+template <int D, class Each>
+RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  const HydroParticle<D> pa = hydro_particle<D>(c, a);
+  Vec<D> dvdt = Vec<D>::zero();
+  Real dudt = 0, drhodt = 0, mu_max = 0;
+  each([&](std::uint32_t b) {
+    const HydroPairRates<D> r =
+        hydro_pair<D>(c.kernel, pa, hydro_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]), !c.summation);
+    dvdt += r.dvdt;
+    dudt += r.dudt;
+    drhodt += r.drhodt;
+    mu_max = r.mu > mu_max ? r.mu : mu_max;
+  });
+  s.dvdt[a] = dvdt;
+  s.dudt[a] = dudt;
+  if (!c.summation) s.drhodt[a] = drhodt;
+  s.mu_max[a] = mu_max;
+}
+
+// ---- feature set Solid ---------------------------------------------------
+
+// Pass 1: the velocity gradient L_a (with the kernel-gradient correction
+// when on), the Jaumann stress rate dS/dt and the artificial stress R_a.
+// Returns false when the correction matrix was ill-conditioned (identity used).
+template <int D, class Each>
+RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
+  each([&](std::uint32_t b) {
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real r = norm(dx);
+    if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
+    const Vec<D> g = Real(0.5) * (kernel_grad<D>(c.kernel, dx, s.h[a]) + kernel_grad<D>(c.kernel, dx, s.h[b]));
+    L += velocity_gradient_pair_term<D>(s.m[b], s.rho[b], s.v[b] - s.v[a], g);
+    if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], s.rho[b], -dx, g);
+  });
+  bool well_conditioned = true;
+  if (c.kernel_correction) {
+    Mat<D> C;
+    well_conditioned = correction_matrix<D>(M, kCorrectionMinDet, C);
+    L = L * C;  // M is symmetric for radial kernels, so C^T = C
+  }
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
+  if (c.art_R) {
+    Mat<D> sigma = s.S[a];
+    for (int i = 0; i < D; ++i) sigma.m[i][i] -= s.p[a];
+    c.art_R[a] = mat.as_exponent > Real(0) ? artificial_stress_tensor<D>(sigma, s.rho[a], mat.as_epsilon)
+                                           : Mat<D>::zero();
+  }
+  return well_conditioned;
+}
+
+template <int D>
+RUBBLE_HD_INLINE SolidParticle<D> solid_particle(const RhsContext<D>& c, std::uint32_t i) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[i]];
+  return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], s.S[i],
+                          c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent};
+}
+
+// Pass 2: the full-stress momentum, energy and continuity equations.
+template <int D, class Each>
+RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  const SolidParticle<D> pa = solid_particle<D>(c, a);
+  Vec<D> dvdt = Vec<D>::zero();
+  Real dudt = 0, drhodt = 0, mu_max = 0;
+  each([&](std::uint32_t b) {
+    const SolidPairRates<D> r = solid_pair<D>(c.kernel, pa, solid_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]));
+    dvdt += r.dvdt;
+    dudt += r.dudt;
+    drhodt += r.drhodt;
+    mu_max = r.mu > mu_max ? r.mu : mu_max;
+  });
+  s.dvdt[a] = dvdt;
+  s.dudt[a] = dudt;
+  s.drhodt[a] = drhodt;
+  s.mu_max[a] = mu_max;
+}
+
+// ---- after the pair sums -------------------------------------------------
+
+// Boundary particles move as prescribed: dv/dt = 0, so they keep their
+// velocity (0 when fixed) and move with it. Frozen ones (flag 1) keep their
+// state too; evolving ones (flag 2) integrate rho, u and S like the rest.
+template <int D>
+RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (!s.boundary[a]) return;
+  s.dvdt[a] = Vec<D>::zero();
+  if (s.boundary[a] == 2) return;
+  s.dudt[a] = 0;
+  if (s.drhodt) s.drhodt[a] = 0;
+  if (s.dSdt) s.dSdt[a] = Mat<D>::zero();
+}
+
+// XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp),
+// within a material only (not across a contact between bodies of different
+// materials); boundary particles get none.
+template <int D, class Each>
+RUBBLE_HD_INLINE void xsph_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  Vec<D> sum = Vec<D>::zero();
+  if (!(s.boundary && s.boundary[a])) {
+    each([&](std::uint32_t b) {
+      if (s.material_id[b] != s.material_id[a]) return;
+      const Real r = norm(c.domain.separation(s.x[a], s.x[b]));
+      const Real w = Real(0.5) * (kernel_w<D>(c.kernel, r, s.h[a]) + kernel_w<D>(c.kernel, r, s.h[b]));
+      if (w > Real(0)) sum += xsph_pair_term<D>(s.m[b], s.rho[a], s.rho[b], s.v[b] - s.v[a], w);
+    });
+  }
+  s.xsph_v[a] = c.xsph_epsilon * sum;
+}
+
+// Largest stable step of particle a (Courant and force limits); solids use
+// the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho)).
+template <int D>
+RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  const Real hM = monaghan_h(s.h[a]);
+  const Real cl = mat.shear_modulus > Real(0) ? elastic_signal_speed(s.cs[a], mat.shear_modulus, s.rho[a]) : s.cs[a];
+  const Real dt_c = courant_dt(c.courant, hM, cl, mat.av.alpha, mat.av.beta, s.mu_max[a]);
+  const Real dt_f = force_dt(c.force_factor, hM, norm(s.dvdt[a]));
+  return dt_c < dt_f ? dt_c : dt_f;
+}
+
+// Whether particle a's evolved state is finite (the run stops otherwise).
+template <int D>
+RUBBLE_HD_INLINE bool finite_particle(const StoreView<D>& s, std::uint32_t a) {
+  bool ok = std::isfinite(s.u[a]) && std::isfinite(s.rho[a]) && std::isfinite(s.h[a]);
+  for (int k = 0; k < D; ++k) ok = ok && std::isfinite(s.x[a][k]) && std::isfinite(s.v[a][k]);
+  return ok;
+}
+
+}  // namespace rubble

@@ -1,0 +1,68 @@
+#pragma once
+// A StoreView is the particle store as plain pointers, one per field
+// (nullptr when the run does not allocate the field). The CPU driver makes
+// one over a ParticleStore's std::vectors, the CUDA driver over its device
+// arrays; the per-particle functions of rubble/drivers/particle_rates.hpp
+// take a view, so both backends run the same loop bodies.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <type_traits>
+
+#include "rubble/core/hd.hpp"
+#include "rubble/core/mat.hpp"
+#include "rubble/core/real.hpp"
+#include "rubble/core/vec.hpp"
+
+namespace rubble {
+
+template <int D>
+struct StoreView {
+  std::size_t n = 0;
+  Real* m = nullptr;
+  std::int32_t* material_id = nullptr;
+  Vec<D>* x = nullptr;
+  Vec<D>* v = nullptr;
+  Real* u = nullptr;
+  Real* rho = nullptr;
+  Real* h = nullptr;
+  Real* p = nullptr;
+  Real* cs = nullptr;
+  Real* omega = nullptr;
+  Vec<D>* dvdt = nullptr;
+  Real* dudt = nullptr;
+  Real* drhodt = nullptr;
+  Real* mu_max = nullptr;
+  Vec<D>* a_grav = nullptr;
+  Real* phi = nullptr;
+  Mat<D>* S = nullptr;
+  Mat<D>* dSdt = nullptr;
+  std::int32_t* boundary = nullptr;
+  Vec<D>* xsph_v = nullptr;
+
+  // Point the field called `name` (the field table's names) at `ptr`;
+  // false if the name is unknown or the element type does not match.
+  template <class T>
+  bool bind(std::string_view name, T* ptr) {
+    bool ok = false;
+    auto set = [&](auto*& slot, std::string_view field) {
+      using Slot = std::remove_reference_t<decltype(*slot)>;
+      if constexpr (std::is_same_v<Slot, T>) {
+        if (name == field) {
+          slot = ptr;
+          ok = true;
+        }
+      }
+    };
+    set(m, "m"), set(material_id, "material_id"), set(x, "x"), set(v, "v"), set(u, "u"), set(rho, "rho");
+    set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
+    set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
+    set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
+    return ok;
+  }
+
+  // dx/dt of particle i: v, plus the XSPH correction when the run has it.
+  RUBBLE_HD Vec<D> position_rate(std::size_t i) const { return xsph_v ? v[i] + xsph_v[i] : v[i]; }
+};
+
+}  // namespace rubble
