@@ -43,7 +43,7 @@ namespace {
 struct RunArgs {
   std::string scene;
   std::string out;
-  std::string backend = "cpu";
+  std::string backend;  // empty: RUBBLE_BACKEND from the environment, else cpu
   std::vector<std::string> sets;
   bool quiet = false;
 };
@@ -51,8 +51,11 @@ struct RunArgs {
 // Validate the scene first, then claim the output directory (never
 // overwriting anything), then run.
 int run_command(const RunArgs& args) {
-  if (args.backend == "cuda") {
-    std::cerr << "rubble: error: --backend cuda: this build has no CUDA backend (available: cpu)\n";
+  const rubble::Backend backend =
+      args.backend.empty() ? rubble::default_backend() : rubble::parse_backend(args.backend, "--backend");
+  if (!rubble::backend_built(backend)) {
+    std::cerr << "rubble: error: --backend " << rubble::backend_name(backend)
+              << ": this build has no CUDA backend (available: cpu; configure with -DRUBBLE_CUDA=ON)\n";
     return 2;
   }
 
@@ -75,6 +78,7 @@ int run_command(const RunArgs& args) {
   options.write_output = true;
   options.progress = isatty(2) != 0;
   options.quiet = args.quiet;
+  options.backend = backend;
   const rubble::FinalState final_state = rubble::run_scene(scene, options);
 
   if (!args.quiet)
@@ -182,14 +186,14 @@ int info_command() {
   threads = omp_get_max_threads();
 #endif
   std::cout << "rubble " << RUBBLE_VERSION << " (commit " << RUBBLE_COMMIT << ")\n"
-            << "backends:        cpu\n"
+            << "backends:        cpu" << (rubble::backend_built(rubble::Backend::Cuda) ? ", cuda" : "") << "\n"
             << "precision:       " << (sizeof(rubble::Real) == 8 ? "double" : "float") << "\n"
             << "OpenMP threads:  " << threads
 #ifndef _OPENMP
             << " (built without OpenMP)"
 #endif
             << "\n"
-            << "GPU seen:        none (CPU-only build)\n";
+            << "GPU seen:        " << rubble::gpu_description() << "\n";
   return 0;
 }
 
@@ -206,9 +210,9 @@ int main(int argc, char** argv) {
   run->add_option("--out", run_args.out,
                   "Output directory for snapshots and conserved.csv (default: out/<scene file stem>); "
                   "must not exist or be empty");
-  run->add_option("--backend", run_args.backend, "Compute backend")
-      ->check(CLI::IsMember({"cpu", "cuda"}))
-      ->capture_default_str();
+  run->add_option("--backend", run_args.backend,
+                  "Compute backend: cpu or cuda (default: $RUBBLE_BACKEND, else cpu)")
+      ->check(CLI::IsMember({"cpu", "cuda"}));
   run->add_option("--set", run_args.sets,
                   "Override a scene key, e.g. --set simulation.end_time=0.5 or --set bodies.0.spacing=0.01 "
                   "(value parsed as TOML, else taken as a string; repeatable)")

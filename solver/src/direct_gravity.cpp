@@ -7,13 +7,7 @@ void direct_gravity(const Vec<3>* x, const Real* m, const Real* eps, std::size_t
                     Vec<3>* acc, Real* phi) {
 #pragma omp parallel for schedule(dynamic, 64) if (n > 256)
   for (std::size_t a = 0; a < n; ++a) {
-    GravityField f{Vec<3>::zero(), Real(0)};
-    const Vec<3> xa = x[a];
-    const Real ea = eps ? eps[a] : Real(0);
-    for (std::size_t b = 0; b < n; ++b) {
-      if (b == a) continue;
-      gravity_pair_add(kernel, xa - x[b], m[b], ea, eps ? eps[b] : Real(0), f);
-    }
+    const GravityField f = direct_field_of_particle(x, m, eps, n, kernel, a);
     acc[a] = f.a * G;
     if (phi) phi[a] = f.phi * G;
   }

@@ -264,11 +264,16 @@ Backend parse_backend(const std::string& name, const std::string& where) {
 
 bool backend_built(Backend b) {
 #ifdef RUBBLE_HAVE_CUDA
+  (void)b;
   return true;
 #else
   return b == Backend::Cpu;
 #endif
 }
+
+#ifndef RUBBLE_HAVE_CUDA
+std::string gpu_description() { return "none (CPU-only build)"; }
+#endif
 
 Backend default_backend() {
   const char* env = std::getenv("RUBBLE_BACKEND");

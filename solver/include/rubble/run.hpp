@@ -32,6 +32,8 @@ bool backend_built(Backend b);
 // environment ("cpu" or "cuda"; how the whole ctest ladder runs on a GPU
 // host, ci/gpu/check), cpu when unset.
 Backend default_backend();
+// The GPU this process sees ("none (CPU-only build)" without CUDA).
+std::string gpu_description();
 
 struct RunOptions {
   std::string out_dir;        // where snapshots and conserved.csv go

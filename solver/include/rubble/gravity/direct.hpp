@@ -13,6 +13,20 @@
 
 namespace rubble {
 
+// The field per unit G on particle a from all others, summed in index
+// order: the loop body of both backends' direct summation.
+RUBBLE_HD_INLINE GravityField direct_field_of_particle(const Vec<3>* x, const Real* m, const Real* eps, std::size_t n,
+                                                       KernelType kernel, std::size_t a) {
+  GravityField f{Vec<3>::zero(), Real(0)};
+  const Vec<3> xa = x[a];
+  const Real ea = eps ? eps[a] : Real(0);
+  for (std::size_t b = 0; b < n; ++b) {
+    if (b == a) continue;
+    gravity_pair_add(kernel, xa - x[b], m[b], ea, eps ? eps[b] : Real(0), f);
+  }
+  return f;
+}
+
 // Acceleration acc[i] and potential phi[i] (may be nullptr) of every
 // particle due to all others, multiplied by G. eps: softening lengths
 // (support radii of `kernel`), nullptr for point masses. OpenMP-parallel

@@ -28,26 +28,32 @@ namespace rubble {
 // then use the full resolution). On periodic axes: the domain, so that keys
 // do not depend on where the particles happen to be.
 template <int D>
-Box<D> bounding_box(const Vec<D>* x, std::size_t n, const Box<D>& domain) {
+Box<D> bounding_box_from_extent(const Box<D>& domain, const Vec<D>& mn, const Vec<D>& mx) {
   Box<D> b = domain;
-  if (n == 0) return b;
   for (int k = 0; k < D; ++k) {
     if (domain.periodic[k]) continue;
-    Real mn = x[0][k], mx = x[0][k];
-    for (std::size_t i = 1; i < n; ++i) {
-      mn = std::min(mn, x[i][k]);
-      mx = std::max(mx, x[i][k]);
-    }
     // Pad by a small fraction of the extent, but never less than a few
     // rounding units of the coordinates (or anything at all if they are 0).
     const Real eps = std::numeric_limits<Real>::epsilon();
-    const Real scale = std::max(std::abs(mn), std::abs(mx));
-    Real pad = std::max(Real(1e-6) * (mx - mn), Real(4) * eps * scale);
+    const Real scale = std::max(std::abs(mn[k]), std::abs(mx[k]));
+    Real pad = std::max(Real(1e-6) * (mx[k] - mn[k]), Real(4) * eps * scale);
     pad = std::max(pad, std::numeric_limits<Real>::min());
-    b.lo[k] = mn - pad;
-    b.hi[k] = mx + pad;
+    b.lo[k] = mn[k] - pad;
+    b.hi[k] = mx[k] + pad;
   }
   return b;
+}
+
+template <int D>
+Box<D> bounding_box(const Vec<D>* x, std::size_t n, const Box<D>& domain) {
+  if (n == 0) return domain;
+  Vec<D> mn = x[0], mx = x[0];
+  for (std::size_t i = 1; i < n; ++i)
+    for (int k = 0; k < D; ++k) {
+      mn[k] = std::min(mn[k], x[i][k]);
+      mx[k] = std::max(mx[k], x[i][k]);
+    }
+  return bounding_box_from_extent<D>(domain, mn, mx);  // the particles' extent (the CUDA backend reduces on the device)
 }
 
 // Morton key of every position, quantised within box.

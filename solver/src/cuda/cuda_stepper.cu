@@ -1,0 +1,760 @@
+// The CUDA backend (issue #6): device-resident particles, a cell list over a
+// device radix sort, and the same per-particle loop bodies as the CPU
+// driver. See cuda_stepper.hpp for the interface and DESIGN.md principles
+// 1, 4, 5 and 6 for why it is shaped this way.
+//
+// What runs where:
+//   sort_particles   Morton keys of the positions (morton.hpp), a stable
+//                    radix sort of (key, index) on the device (Thrust, which
+//                    uses CUB's radix sort for integer keys), and a gather of
+//                    every allocated field: the same permutation as the CPU's
+//                    spatial_sort_permutation.
+//   neighbours       a uniform grid whose cells are at least the largest
+//                    search radius wide; (cell, index) pairs radix-sorted on
+//                    the device, a start/end range per cell, and a visitor
+//                    (GridNeighbors) that offers every particle of the 3^D
+//                    surrounding cells to the loop body, which keeps those
+//                    within max(R_a, R_b) - the CPU cell list's criterion.
+//   right-hand side  one kernel per loop body of rubble/drivers/particle_rates.hpp.
+//   integrators      the per-particle steps of leapfrog.hpp and rk2_adaptive.hpp.
+//   reductions       time-step limit, conserved sums, finiteness, counts:
+//                    thrust::transform_reduce over the particle index.
+// The sums over neighbours run in cell order, not in ascending index order
+// as on the CPU, so results differ by rounding (the parity test bounds it).
+#include <cuda/functional>
+#include <cuda_runtime.h>
+#include <thrust/device_ptr.h>
+#include <thrust/execution_policy.h>
+#include <thrust/functional.h>
+#include <thrust/iterator/counting_iterator.h>
+#include <thrust/reduce.h>
+#include <thrust/sequence.h>
+#include <thrust/sort.h>
+#include <thrust/transform_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include "cuda/cuda_check.hpp"
+#include "cuda/cuda_stepper.hpp"
+#include "rubble/core/error.hpp"
+#include "rubble/drivers/material_params.hpp"
+#include "rubble/drivers/particle_rates.hpp"
+#include "rubble/gravity/direct.hpp"
+#include "rubble/integrate/leapfrog.hpp"
+#include "rubble/integrate/rk2_adaptive.hpp"
+#include "rubble/io/conserved_sums.hpp"
+#include "rubble/neighbors/morton.hpp"
+#include "rubble/neighbors/spatial_order.hpp"
+#include "rubble/physics/kernels.hpp"
+#include "rubble/run.hpp"
+
+namespace rubble {
+
+std::string gpu_description() {
+  int count = 0;
+  const cudaError_t err = cudaGetDeviceCount(&count);
+  if (err != cudaSuccess || count == 0)
+    return std::string("none (CUDA build; ") + (err != cudaSuccess ? cudaGetErrorString(err) : "no device") + ")";
+  cudaDeviceProp prop{};
+  RUBBLE_CUDA(cudaGetDeviceProperties(&prop, 0));
+  return std::string(prop.name) + " (compute capability " + std::to_string(prop.major) + "." +
+         std::to_string(prop.minor) + ", " + std::to_string(prop.totalGlobalMem >> 20) + " MiB)" +
+         (count > 1 ? " and " + std::to_string(count - 1) + " more" : "");
+}
+
+namespace {
+
+constexpr unsigned kBlock = 128;
+
+template <class F>
+__global__ void each_kernel(std::size_t n, F f) {
+  const std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x;
+  if (i < n) f(i);
+}
+
+// Run f(i) for i in [0, n) on the device; `what` names the kernel in errors.
+template <class F>
+void for_each_index(const char* what, std::size_t n, F f) {
+  if (n == 0) return;
+  each_kernel<<<unsigned((n + kBlock - 1) / kBlock), kBlock>>>(n, f);
+  cuda::check(cudaGetLastError(), what, __FILE__, __LINE__);
+#ifdef RUBBLE_CUDA_SYNC_CHECK
+  cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
+#endif
+}
+
+// Reduce op(f(i)) over i in [0, n) on the device.
+template <class T, class F, class Op>
+T reduce_index(std::size_t n, F f, T init, Op op) {
+  const thrust::counting_iterator<std::size_t> first(0);
+  // the device lambda's result type, stated for the host side of Thrust
+  T r = thrust::transform_reduce(thrust::device, first, first + n, ::cuda::proclaim_return_type<T>(f), init, op);
+  cuda::check(cudaGetLastError(), "thrust::transform_reduce", __FILE__, __LINE__);
+  return r;
+}
+
+// An owned device allocation (move-only).
+class DeviceBuffer {
+ public:
+  DeviceBuffer() = default;
+  explicit DeviceBuffer(std::size_t bytes) { resize(bytes); }
+  ~DeviceBuffer() {
+    if (p_) cudaFree(p_);  // no throw from a destructor
+  }
+  DeviceBuffer(DeviceBuffer&& o) noexcept : p_(o.p_), bytes_(o.bytes_) { o.p_ = nullptr, o.bytes_ = 0; }
+  DeviceBuffer& operator=(DeviceBuffer&&) = delete;
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+
+  // Grow to at least `bytes` (contents are not kept).
+  void resize(std::size_t bytes) {
+    if (bytes <= bytes_) return;
+    if (p_) RUBBLE_CUDA(cudaFree(p_));
+    p_ = nullptr;
+    bytes_ = 0;
+    RUBBLE_CUDA(cudaMalloc(&p_, bytes));
+    bytes_ = bytes;
+  }
+  void* get() const { return p_; }
+  template <class T>
+  T* as() const {
+    return static_cast<T*>(p_);
+  }
+
+ private:
+  void* p_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
+// Gather `words` 32-bit words per element: dst[i] = src[perm[i]].
+__global__ void gather_words(std::uint32_t* dst, const std::uint32_t* src, const std::uint32_t* perm, std::size_t n,
+                             unsigned words) {
+  const std::size_t k = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x;
+  if (k >= n * words) return;
+  const std::size_t i = k / words, w = k % words;
+  dst[k] = src[std::size_t(perm[i]) * words + w];
+}
+
+// The element type of a field-table member pointer (std::vector<T> PS::*).
+template <class M>
+struct MemberValue;
+template <class C, class T>
+struct MemberValue<std::vector<T> C::*> {
+  using type = T;
+};
+
+// The allocated fields of a ParticleStore, one device array each, with the
+// same names and element types (the field table of particle_store.hpp).
+template <int D>
+class DeviceStore {
+ public:
+  void allocate_like(const ParticleStore<D>& ps) {
+    n_ = ps.n;
+    fields_.clear();
+    for (const auto& f : field_table<D>())
+      std::visit([&](auto member) {
+        const auto& arr = ps.*member;
+        if (arr.empty()) return;
+        using T = typename std::decay_t<decltype(arr)>::value_type;
+        static_assert(sizeof(T) % 4 == 0, "fields are gathered as 32-bit words");
+        fields_.push_back(Field{std::string(f.name), DeviceBuffer(n_ * sizeof(T)), sizeof(T)});
+      }, f.member);
+  }
+
+  void upload(const ParticleStore<D>& ps) {
+    for_each_pair(const_cast<ParticleStore<D>&>(ps), [&](Field& d, void* host, std::size_t bytes) {
+      RUBBLE_CUDA(cudaMemcpy(d.buf.get(), host, bytes, cudaMemcpyHostToDevice));
+    });
+  }
+  void download(ParticleStore<D>& ps) const {
+    for_each_pair(ps, [&](const Field& d, void* host, std::size_t bytes) {
+      RUBBLE_CUDA(cudaMemcpy(host, d.buf.get(), bytes, cudaMemcpyDeviceToHost));
+    });
+  }
+  // Copy another store of the same layout, device to device.
+  void copy_from(const DeviceStore& o) {
+    if (fields_.size() != o.fields_.size()) throw RunError("DeviceStore::copy_from: layouts differ");
+    for (std::size_t k = 0; k < fields_.size(); ++k)
+      RUBBLE_CUDA(cudaMemcpy(fields_[k].buf.get(), o.fields_[k].buf.get(), n_ * fields_[k].elem,
+                             cudaMemcpyDeviceToDevice));
+  }
+  // A store of the same layout (contents undefined).
+  void allocate_as(const DeviceStore& o) {
+    n_ = o.n_;
+    fields_.clear();
+    for (const Field& f : o.fields_) fields_.push_back(Field{f.name, DeviceBuffer(n_ * f.elem), f.elem});
+  }
+
+  // New element i of every field is old element perm[i] (perm on the device).
+  void permute(const std::uint32_t* perm, DeviceBuffer& scratch) {
+    for (Field& f : fields_) {
+      const std::size_t bytes = n_ * f.elem;
+      scratch.resize(bytes);
+      const unsigned words = unsigned(f.elem / 4);
+      const std::size_t total = n_ * words;
+      if (total == 0) continue;
+      gather_words<<<unsigned((total + kBlock - 1) / kBlock), kBlock>>>(scratch.as<std::uint32_t>(),
+                                                                        static_cast<std::uint32_t*>(f.buf.get()), perm, n_, words);
+      cuda::check(cudaGetLastError(), "gather_words", __FILE__, __LINE__);
+      RUBBLE_CUDA(cudaMemcpy(f.buf.get(), scratch.get(), bytes, cudaMemcpyDeviceToDevice));
+    }
+  }
+
+  StoreView<D> view() const {
+    StoreView<D> s;
+    s.n = n_;
+    for (const auto& f : field_table<D>())
+      std::visit([&](auto member) {
+        using T = typename MemberValue<decltype(member)>::type;
+        for (const Field& d : fields_)
+          if (d.name == f.name) s.bind(f.name, d.buf.template as<T>());
+      }, f.member);
+    return s;
+  }
+  std::size_t size() const { return n_; }
+
+ private:
+  struct Field {
+    std::string name;
+    DeviceBuffer buf;
+    std::size_t elem;  // bytes per element
+  };
+
+  // f(device field, host data, bytes) for every allocated field.
+  template <class Fn>
+  void for_each_pair(ParticleStore<D>& ps, Fn&& fn) const {
+    for (const auto& f : field_table<D>())
+      std::visit([&](auto member) {
+        auto& arr = ps.*member;
+        if (arr.empty()) return;
+        for (const Field& d : fields_)
+          if (d.name == f.name) fn(const_cast<Field&>(d), static_cast<void*>(arr.data()), arr.size() * d.elem);
+      }, f.member);
+  }
+
+  std::size_t n_ = 0;
+  std::vector<Field> fields_;
+};
+
+// The `each` of particle_rates.hpp on the device: every particle of the
+// 3^D grid cells around a's cell, kept when |x_a - x_b| < max(R_a, R_b)
+// (minimum image) and b != a - the CPU cell list's criterion.
+template <int D>
+struct GridNeighbors {
+  const Vec<D>* x;
+  const Real* R;
+  const std::uint32_t* order;  // particle indices grouped by cell
+  const std::uint32_t* start;  // first position in `order` of each cell
+  const std::uint32_t* end;    // one past the last
+  Box<D> domain;
+  Vec<D> lo;
+  Real inv_w[D];
+  int G[D];
+  std::uint32_t a;
+
+  RUBBLE_HD int cell_coord(Real xk, int k) const {
+    const Real c = std::floor((xk - lo[k]) * inv_w[k]);
+    return c < Real(0) ? 0 : c > Real(G[k] - 1) ? G[k] - 1 : int(c);
+  }
+
+  template <class F>
+  RUBBLE_HD void operator()(F&& f) const {
+    // the candidate cell coordinates along each axis (each cell once)
+    int cand[D][3], cnt[D];
+    for (int k = 0; k < D; ++k) {
+      const int c = cell_coord(x[a][k], k);
+      cnt[k] = 0;
+      if (domain.periodic[k] && G[k] < 3) {
+        for (int j = 0; j < G[k]; ++j) cand[k][cnt[k]++] = j;
+      } else {
+        for (int o = -1; o <= 1; ++o) {
+          int j = c + o;
+          if (domain.periodic[k]) j = (j + G[k]) % G[k];
+          else if (j < 0 || j >= G[k]) continue;
+          cand[k][cnt[k]++] = j;
+        }
+      }
+    }
+    int total = 1;
+    for (int k = 0; k < D; ++k) total *= cnt[k];
+    const Real Ra = R[a];
+    for (int t = 0; t < total; ++t) {
+      std::size_t lin = 0, stride = 1;
+      int rest = t;
+      for (int k = 0; k < D; ++k) {
+        lin += std::size_t(cand[k][rest % cnt[k]]) * stride;
+        rest /= cnt[k];
+        stride *= std::size_t(G[k]);
+      }
+      for (std::uint32_t j = start[lin]; j < end[lin]; ++j) {
+        const std::uint32_t b = order[j];
+        if (b == a) continue;
+        const Real rb = R[b], rm = Ra > rb ? Ra : rb;
+        if (norm2(domain.separation(x[a], x[b])) < rm * rm) f(b);
+      }
+    }
+  }
+};
+
+// A plain device array of T.
+template <class T>
+struct DeviceArray {
+  DeviceBuffer buf;
+  std::size_t n = 0;
+  void resize(std::size_t count) {
+    buf.resize(count * sizeof(T));
+    n = count;
+  }
+  T* data() const { return buf.as<T>(); }
+};
+
+}  // namespace
+
+template <int D>
+struct CudaStepper<D>::Impl {
+  ParticleStore<D>& host;
+  Box<D> domain;
+  std::vector<MaterialParams> materials_host;
+  DeviceArray<MaterialParams> materials;
+  DeviceStore<D> store;
+  DeviceBuffer scratch;
+  KernelType kernel;
+  Real hfact, courant, force_factor, xsph_epsilon;
+  bool summation, solid = false, kernel_correction = false, artificial_stress = false;
+  GravityConfig gravity;
+  DeviceArray<Mat<D>> art_R;
+  DeviceArray<Real> search_radius, eps;
+  DeviceArray<int> flags;
+  // grid cell list
+  DeviceArray<std::uint64_t> keys;
+  DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
+  GridNeighbors<D> grid{};
+  // integrator scratch
+  DeviceArray<Vec<D>> v_half;
+  DeviceArray<Real> u_half, rho_half;
+  DeviceArray<Mat<D>> S_half;
+  DeviceStore<D> y0, y1;
+  std::int64_t fallbacks_total = 0, evaluations = 0, rebuilds = 0;
+  bool host_current = true;
+
+  Impl(const Scene& scene, ParticleStore<D>& ps, const Box<D>& dom)
+      : host(ps),
+        domain(dom),
+        materials_host(material_params_from_scene(scene)),
+        kernel(scene.simulation.kernel),
+        hfact(Real(scene.simulation.hfact > 0 ? scene.simulation.hfact : kernel_default_hfact(scene.simulation.kernel))),
+        courant(Real(scene.simulation.courant)),
+        force_factor(Real(scene.simulation.force_factor)),
+        xsph_epsilon(Real(scene.simulation.xsph)),
+        summation(scene.simulation.density == DensityForm::Summation),
+        gravity(scene.gravity) {
+    int devices = 0;
+    const cudaError_t err = cudaGetDeviceCount(&devices);
+    if (err != cudaSuccess || devices == 0)
+      throw RunError(std::string("--backend cuda: no CUDA device available (") +
+                     (err != cudaSuccess ? cudaGetErrorString(err) : "device count 0") + ")");
+    if (gravity.mode == GravityMode::BarnesHut)
+      throw RunError(
+          "gravity.mode = \"barnes_hut\" has no CUDA driver yet (issue #6: the device octree is still to be "
+          "written); run it with --backend cpu, or use gravity.mode = \"direct\" on the GPU");
+    if (ps.n > std::numeric_limits<std::uint32_t>::max()) throw RunError("more than 2^32 - 1 particles");
+    for (const MaterialParams& m : materials_host) {
+      solid = solid || m.shear_modulus > Real(0);
+      artificial_stress = artificial_stress || m.as_exponent > Real(0);
+    }
+    if (solid) {
+      if (summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
+        throw RunError("solids need continuity density with the S and dSdt fields allocated");
+      kernel_correction = scene.simulation.kernel_correction;
+    }
+    if (xsph_epsilon > Real(0) && ps.xsph_v.size() != ps.n) throw RunError("XSPH needs the xsph_v field allocated");
+    materials.resize(materials_host.size());
+    RUBBLE_CUDA(cudaMemcpy(materials.data(), materials_host.data(), materials_host.size() * sizeof(MaterialParams),
+                           cudaMemcpyHostToDevice));
+    const std::size_t n = ps.n;
+    store.allocate_like(ps);
+    store.upload(ps);
+    if (solid && artificial_stress) art_R.resize(n);
+    search_radius.resize(n);
+    flags.resize(n);
+    if (gravity.mode != GravityMode::Off) eps.resize(n);
+    keys.resize(n);
+    order.resize(n);
+    perm.resize(n);
+  }
+
+  std::size_t n() const { return store.size(); }
+
+  RhsContext<D> context() const {
+    RhsContext<D> c;
+    c.s = store.view();
+    c.mat = materials.data();
+    c.domain = domain;
+    c.kernel = kernel;
+    c.hfact = hfact;
+    c.summation = summation;
+    c.kernel_correction = kernel_correction;
+    c.art_R = art_R.n ? art_R.data() : nullptr;
+    c.xsph_epsilon = xsph_epsilon;
+    c.courant = courant;
+    c.force_factor = force_factor;
+    return c;
+  }
+
+  // The particles' extent on every axis (min, max), reduced on the device.
+  void extent(Vec<D>& mn, Vec<D>& mx) const {
+    const Vec<D>* x = store.view().x;
+    for (int k = 0; k < D; ++k) {
+      mn[k] = reduce_index<Real>(n(), [=] __device__(std::size_t i) { return x[i][k]; },
+                                 std::numeric_limits<Real>::max(), thrust::minimum<Real>());
+      mx[k] = reduce_index<Real>(n(), [=] __device__(std::size_t i) { return x[i][k]; },
+                                 std::numeric_limits<Real>::lowest(), thrust::maximum<Real>());
+    }
+  }
+
+  // Sort along the space-filling curve: the CPU's permutation, on the device.
+  void sort_particles() {
+    const std::size_t count = n();
+    if (count == 0) return;
+    Vec<D> mn, mx;
+    extent(mn, mx);
+    const Box<D> box = bounding_box_from_extent<D>(domain, mn, mx);
+    const Vec<D>* x = store.view().x;
+    std::uint64_t* k = keys.data();
+    std::uint32_t* p = perm.data();
+    for_each_index("morton keys", count, [=] __device__(std::size_t i) {
+      k[i] = morton_key<D>(x[i], box);
+      p[i] = std::uint32_t(i);
+    });
+    // LSD radix sort: stable, so equal keys keep their index order as on the CPU
+    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
+                        thrust::device_pointer_cast(p));
+    cuda::check(cudaGetLastError(), "thrust::sort_by_key (Morton keys)", __FILE__, __LINE__);
+    store.permute(p, scratch);
+    host_current = false;
+  }
+
+  // The grid cell list for search radii R (device array of n).
+  void build_grid(const Real* R) {
+    const std::size_t count = n();
+    Real r_max = reduce_index<Real>(count, [=] __device__(std::size_t i) { return R[i]; }, Real(0),
+                                    thrust::maximum<Real>());
+    if (!(r_max > Real(0)) || !std::isfinite(r_max)) throw RunError("non-positive or non-finite search radius");
+    Vec<D> mn, mx;
+    extent(mn, mx);
+    for (int k = 0; k < D; ++k)
+      if (!std::isfinite(mn[k]) || !std::isfinite(mx[k])) throw RunError("non-finite particle position");
+    GridNeighbors<D> g{};
+    // cells at least r_max wide; no more cells than a few per particle
+    const double max_cells = std::max(64.0, 4.0 * double(count));
+    for (;;) {
+      double cells = 1;
+      for (int k = 0; k < D; ++k) {
+        if (domain.periodic[k]) {
+          const Real L = domain.length(k);
+          if (r_max > Real(0.5) * L)
+            throw RunError("a search radius exceeds half the periodic length along axis " + std::to_string(k));
+          g.G[k] = std::max(1, int(std::floor(L / r_max)));
+          g.lo[k] = domain.lo[k];
+          g.inv_w[k] = Real(g.G[k]) / L;
+        } else {
+          g.G[k] = int(std::floor((mx[k] - mn[k]) / r_max)) + 1;
+          g.lo[k] = mn[k];
+          g.inv_w[k] = Real(1) / r_max;
+        }
+        cells *= double(g.G[k]);
+      }
+      if (cells <= max_cells) break;
+      r_max *= Real(1.26);  // coarser cells: fewer of them, same neighbours
+    }
+    std::size_t cells = 1;
+    for (int k = 0; k < D; ++k) cells *= std::size_t(g.G[k]);
+    cell_start.resize(cells);
+    cell_end.resize(cells);
+    RUBBLE_CUDA(cudaMemset(cell_start.data(), 0, cells * sizeof(std::uint32_t)));
+    RUBBLE_CUDA(cudaMemset(cell_end.data(), 0, cells * sizeof(std::uint32_t)));
+
+    g.domain = domain;
+    const StoreView<D> s = store.view();
+    g.x = s.x;
+    g.R = R;
+    g.order = order.data();
+    g.start = cell_start.data();
+    g.end = cell_end.data();
+    std::uint64_t* cell = keys.data();
+    std::uint32_t* ord = order.data();
+    const GridNeighbors<D> gg = g;
+    for_each_index("cell ids", count, [=] __device__(std::size_t i) {
+      std::size_t lin = 0, stride = 1;
+      for (int k = 0; k < D; ++k) {
+        lin += std::size_t(gg.cell_coord(gg.x[i][k], k)) * stride;
+        stride *= std::size_t(gg.G[k]);
+      }
+      cell[i] = lin;
+      ord[i] = std::uint32_t(i);
+    });
+    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(cell), thrust::device_pointer_cast(cell + count),
+                        thrust::device_pointer_cast(ord));
+    cuda::check(cudaGetLastError(), "thrust::sort_by_key (cells)", __FILE__, __LINE__);
+    std::uint32_t* st = cell_start.data();
+    std::uint32_t* en = cell_end.data();
+    for_each_index("cell ranges", count, [=] __device__(std::size_t i) {
+      const std::uint64_t c = cell[i];
+      if (i == 0 || cell[i - 1] != c) st[c] = std::uint32_t(i);
+      if (i + 1 == count || cell[i + 1] != c) en[c] = std::uint32_t(i + 1);
+    });
+    grid = g;
+    ++rebuilds;
+  }
+
+  void summation_density_and_h() {
+    const std::size_t count = n();
+    constexpr Real kSkin = Real(1.15);
+    Real* R = search_radius.data();
+    int* flag = flags.data();
+    const StoreView<D> s0 = store.view();
+    for_each_index("search radius", count, [=] __device__(std::size_t i) { R[i] = kSkin * s0.h[i]; });
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      build_grid(R);
+      const RhsContext<D> c = context();
+      GridNeighbors<D> g = grid;
+      for_each_index("summation density", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        const bool ok = summation_density_particle<D>(c, std::uint32_t(i), R[i], each);
+        if (!ok) R[i] = kSkin * c.s.h[i];
+        flag[i] = ok ? 0 : 1;
+      });
+      const int outgrown = reduce_index<int>(count, [=] __device__(std::size_t i) { return flag[i]; }, 0,
+                                             thrust::plus<int>());
+      if (outgrown == 0) return;
+    }
+    throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
+  }
+
+  void evaluate() {
+    ++evaluations;
+    host_current = false;
+    const std::size_t count = n();
+    if (summation) {
+      summation_density_and_h();
+    } else {
+      const RhsContext<D> c0 = context();
+      for_each_index("h from density", count,
+                     [=] __device__(std::size_t i) { h_from_density_particle<D>(c0, std::uint32_t(i)); });
+      build_grid(c0.s.h);
+    }
+    const RhsContext<D> c = context();
+    const GridNeighbors<D> g = grid;
+    for_each_index("equation of state", count, [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
+    if (solid) {
+      int* flag = flags.data();
+      for_each_index("solid velocity gradient", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        flag[i] = solid_gradient_particle<D>(c, std::uint32_t(i), each) ? 0 : 1;
+      });
+      fallbacks_total +=
+          reduce_index<std::int64_t>(count, [=] __device__(std::size_t i) { return std::int64_t(flag[i]); },
+                                     std::int64_t(0), thrust::plus<std::int64_t>());
+      for_each_index("solid rates", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        solid_rates_particle<D>(c, std::uint32_t(i), each);
+      });
+    } else {
+      for_each_index("hydro rates", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        hydro_rates_particle<D>(c, std::uint32_t(i), each);
+      });
+    }
+    if (gravity.mode == GravityMode::Direct) self_gravity(c);
+    if (c.s.boundary)
+      for_each_index("hold boundaries", count,
+                     [=] __device__(std::size_t i) { hold_boundary_particle<D>(c, std::uint32_t(i)); });
+    if (xsph_epsilon > Real(0))
+      for_each_index("xsph", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        xsph_particle<D>(c, std::uint32_t(i), each);
+      });
+  }
+
+  // Direct summation on the device (3-D): the loop body of direct.hpp.
+  void self_gravity(const RhsContext<D>& c) {
+    if constexpr (D == 3) {
+      const std::size_t count = n();
+      Real* e = eps.data();
+      const bool fixed = gravity.softening == GravitySoftening::Fixed;
+      const Real eps_fixed = Real(gravity.softening_length);
+      const StoreView<3> s = c.s;
+      for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
+      const KernelType k = kernel;
+      const Real G = Real(gravity.G);
+      for_each_index("direct gravity", count, [=] __device__(std::size_t i) {
+        const GravityField f = direct_field_of_particle(s.x, s.m, e, count, k, i);
+        s.a_grav[i] = f.a * G;
+        s.phi[i] = f.phi * G;
+        s.dvdt[i] += s.a_grav[i];
+      });
+    } else {
+      (void)c;
+      throw RunError("self-gravity needs a 3-D scene");
+    }
+  }
+
+  double dt_limit() {
+    const RhsContext<D> c = context();
+    return double(reduce_index<Real>(
+        n(), [=] __device__(std::size_t i) { return dt_limit_particle<D>(c, std::uint32_t(i)); }, Real(1e30),
+        thrust::minimum<Real>()));
+  }
+
+  void leapfrog(Real dt) {
+    const std::size_t count = n();
+    const StoreView<D> s = store.view();
+    v_half.resize(count);
+    u_half.resize(count);
+    if (s.drhodt) rho_half.resize(count);
+    if (s.dSdt) S_half.resize(count);
+    const LeapfrogHalf<D> half{v_half.data(), u_half.data(), s.drhodt ? rho_half.data() : nullptr,
+                               s.dSdt ? S_half.data() : nullptr};
+    const Box<D> dom = domain;
+    for_each_index("leapfrog kick-drift", count,
+                   [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
+    evaluate();
+    for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
+  }
+
+  Rk2Result rk2(Real dt, Real tol, Real dt_min) {
+    const std::size_t count = n();
+    if (y0.size() != count) {
+      y0.allocate_as(store);
+      y1.allocate_as(store);
+    }
+    y0.copy_from(store);  // state and k1 (its rates)
+    const StoreView<D> v0 = y0.view(), v1 = y1.view(), y = store.view();
+    const Box<D> dom = domain;
+    int rejections = 0;
+    for (;;) {
+      for_each_index("rk2 stage 2", count,
+                     [=] __device__(std::size_t i) { rk2_combine<D>(y, v0, v0, nullptr, dt, dom, i); });
+      evaluate();
+      y1.copy_from(store);  // k2 = rates of y1
+      const Real q = Real(0.25) * dt;
+      for_each_index("rk2 stage 3", count, [=] __device__(std::size_t i) {
+        rk2_combine<D>(y, v0, v0, &v1, q, dom, i);
+      });
+      evaluate();  // k3 = rates in the store
+      const Real c23 = Real(2) / Real(3) * dt;
+      const Real err = reduce_index<Real>(
+          count, [=] __device__(std::size_t i) { return rk2_error_particle<D>(v0, v1, y, c23, i); }, Real(0),
+          thrust::maximum<Real>());
+      const Real factor = rk2_step_factor(err, tol);
+      if (err <= tol || dt <= dt_min) {
+        const Real h2 = Real(0.5) * dt;
+        for_each_index("rk2 final", count, [=] __device__(std::size_t i) {
+          rk2_combine<D>(y, v0, v0, &v1, h2, dom, i);
+        });
+        evaluate();  // k1 of the next step
+        return {dt, dt * factor, rejections};
+      }
+      store.copy_from(y0);  // rejected: back to y_n with a smaller step
+      dt = std::max(dt * factor, dt_min);
+      ++rejections;
+    }
+  }
+};
+
+template <int D>
+CudaStepper<D>::CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain)
+    : impl_(std::make_unique<Impl>(scene, ps, domain)) {
+  impl_->sort_particles();
+  impl_->evaluate();
+}
+
+template <int D>
+CudaStepper<D>::~CudaStepper() = default;
+
+template <int D>
+void CudaStepper<D>::sort_particles() {
+  impl_->sort_particles();
+}
+
+template <int D>
+double CudaStepper<D>::dt_limit() {
+  return impl_->dt_limit();
+}
+
+template <int D>
+void CudaStepper<D>::leapfrog(double dt) {
+  impl_->leapfrog(Real(dt));
+}
+
+template <int D>
+Rk2Result CudaStepper<D>::rk2(double dt, double tol, double dt_min) {
+  return impl_->rk2(Real(dt), Real(tol), Real(dt_min));
+}
+
+template <int D>
+void CudaStepper<D>::damp(double f) {
+  const StoreView<D> s = impl_->store.view();
+  const Real fr = Real(f);
+  for_each_index("damping", impl_->n(), [=] __device__(std::size_t i) { s.v[i] *= fr; });
+  impl_->host_current = false;
+}
+
+template <int D>
+std::size_t CudaStepper<D>::first_non_finite() {
+  const StoreView<D> s = impl_->store.view();
+  const std::size_t count = impl_->n();
+  return reduce_index<std::size_t>(
+      count, [=] __device__(std::size_t i) { return finite_particle<D>(s, std::uint32_t(i)) ? count : i; }, count,
+      thrust::minimum<std::size_t>());
+}
+
+template <int D>
+ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt) {
+  const StoreView<D> s = impl_->store.view();
+  const ConservedSums sum = reduce_index<ConservedSums>(
+      impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i); }, ConservedSums{},
+      thrust::plus<ConservedSums>());
+  return conserved_record(sum, t, step, dt);
+}
+
+template <int D>
+const ParticleStore<D>& CudaStepper<D>::host() {
+  if (!impl_->host_current) {
+    impl_->store.download(impl_->host);
+    impl_->host_current = true;
+  }
+  return impl_->host;
+}
+
+template <int D>
+std::int64_t CudaStepper<D>::correction_fallbacks() const {
+  return impl_->fallbacks_total;
+}
+
+template <int D>
+std::int64_t CudaStepper<D>::evaluations() const {
+  return impl_->evaluations;
+}
+
+template <int D>
+bool CudaStepper<D>::solid() const {
+  return impl_->solid;
+}
+
+template class CudaStepper<1>;
+template class CudaStepper<2>;
+template class CudaStepper<3>;
+
+}  // namespace rubble

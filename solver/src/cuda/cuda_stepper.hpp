@@ -1,0 +1,54 @@
+#pragma once
+// The CUDA backend behind the time loop's interface (run.cpp; the CPU one is
+// CpuStepper there). The particles live on the device for the whole run:
+// the constructor uploads the store once, every step runs as kernels over
+// the device arrays, and the host copy is refreshed only when host() is
+// asked for (snapshots, the final state, a diagnostic). The loop bodies are
+// those of the CPU driver (rubble/drivers/particle_rates.hpp, the
+// integrators' per-particle steps, conserved_sums.hpp).
+//
+// Host-only header: no CUDA types, so run.cpp compiles with the C++ compiler.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "rubble/core/box.hpp"
+#include "rubble/integrate/rk2_adaptive.hpp"
+#include "rubble/io/conserved_log.hpp"
+#include "rubble/particles/particle_store.hpp"
+#include "rubble/scene/scene.hpp"
+
+namespace rubble {
+
+template <int D>
+class CudaStepper {
+ public:
+  // Uploads ps, sorts along the space-filling curve and evaluates the
+  // right-hand side once. Throws RunError for what the backend cannot run.
+  CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain);
+  ~CudaStepper();
+  CudaStepper(const CudaStepper&) = delete;
+  CudaStepper& operator=(const CudaStepper&) = delete;
+
+  void sort_particles();
+  double dt_limit();
+  void leapfrog(double dt);
+  Rk2Result rk2(double dt, double tol, double dt_min);
+  void damp(double f);
+  std::size_t first_non_finite();
+  ConservedRecord conserved(double t, std::int64_t step, double dt);
+  const ParticleStore<D>& host();  // downloads the device state into ps
+  std::int64_t correction_fallbacks() const;
+  std::int64_t evaluations() const;
+  bool solid() const;
+  static constexpr const char* name = "cuda";
+
+  // The device state and kernels (cuda_stepper.cu). Public only because
+  // nvcc's extended __device__ lambdas may not live in a private nested class.
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rubble
