@@ -274,7 +274,7 @@ int run(const Args& args) {
       {"errors", Json::object({{"energy", Json::object({{"rel", drift}})},
                                {"momentum", Json::object({{"rel", momentum_ratio}})}})},
       {"wall_seconds", fs.wall_seconds},
-      {"backend", "cpu"},
+      {"backend", rubble::backend_name(rubble::default_backend())},
       {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
       {"commit", RUBBLE_COMMIT},
       {"checks", Json::array(cj)},

@@ -283,7 +283,7 @@ int main(int argc, char** argv) try {
                                {"gravitational", egrav}})},
       {"steps", static_cast<long long>(fs.steps)},
       {"wall_seconds", fs.wall_seconds},
-      {"backend", "cpu"},
+      {"backend", rubble::backend_name(rubble::default_backend())},
       {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
       {"commit", RUBBLE_COMMIT},
       {"checks", Json::array(cj)},

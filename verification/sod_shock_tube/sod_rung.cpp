@@ -205,7 +205,7 @@ int main(int argc, char** argv) try {
         {"errors", Json::object({{"rho", L1(e.rho)}, {"v", L1(e.v)}, {"p", L1(e.p)}, {"u", L1(e.u)}})},
         {"observed_order", orders},
         {"wall_seconds", fs.wall_seconds},
-        {"backend", "cpu"},
+        {"backend", rubble::backend_name(rubble::default_backend())},
         {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
         {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(check_json)},
