@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "../../verification/common/conserved_csv.hpp"
 #include "../../verification/common/record.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
@@ -133,37 +134,7 @@ Output measure(const std::string& path, double dx) {
   return o;
 }
 
-struct EnergyRow {
-  double t, kinetic, internal, total;
-};
-
-std::vector<EnergyRow> read_conserved(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path);
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::string> cols;
-  {
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) cols.push_back(c);
-  }
-  auto col = [&](const std::string& name) {
-    const auto it = std::find(cols.begin(), cols.end(), name);
-    if (it == cols.end()) throw std::runtime_error(path + ": no column " + name);
-    return std::size_t(it - cols.begin());
-  };
-  const std::size_t ct = col("time"), ck = col("kinetic"), ci = col("internal"), ce = col("total");
-  std::vector<EnergyRow> rows;
-  while (std::getline(f, line)) {
-    std::vector<double> v;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) v.push_back(std::stod(c));
-    rows.push_back({v[ct], v[ck], v[ci], v[ce]});
-  }
-  return rows;
-}
+using rubble::verification::ConservedRow;
 
 int run(const Args& args) {
   std::vector<std::string> sets = args.sets;
@@ -193,7 +164,7 @@ int run(const Args& args) {
   }
   if (outs.size() < 2) throw std::runtime_error("fewer than two snapshots written");
 
-  const auto rows = read_conserved((std::filesystem::path(args.out) / "conserved.csv").string());
+  const auto rows = rubble::verification::read_conserved_csv((std::filesystem::path(args.out) / "conserved.csv").string());
   const double ke0 = rows.front().kinetic, e0 = rows.front().total;
   double drift = 0;
   std::vector<double> et, ekin, eint, etot;

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/conserved_csv.hpp"
 #include "../common/record.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/reference/lane_emden.hpp"
@@ -104,38 +105,7 @@ Shape measure(const std::string& path) {
   return s;
 }
 
-struct EnergyRow {
-  double t, kinetic, internal, gravitational, total;
-};
-
-std::vector<EnergyRow> read_conserved(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path);
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::string> cols;
-  {
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) cols.push_back(c);
-  }
-  auto col = [&](const std::string& name) {
-    const auto it = std::find(cols.begin(), cols.end(), name);
-    if (it == cols.end()) throw std::runtime_error(path + ": no column " + name);
-    return std::size_t(it - cols.begin());
-  };
-  const std::size_t ct = col("time"), ck = col("kinetic"), ci = col("internal"), cg = col("gravitational"),
-                    ce = col("total");
-  std::vector<EnergyRow> rows;
-  while (std::getline(f, line)) {
-    std::vector<double> v;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) v.push_back(std::stod(c));
-    rows.push_back({v[ct], v[ck], v[ci], v[cg], v[ce]});
-  }
-  return rows;
-}
+using rubble::verification::ConservedRow;
 
 }  // namespace
 
@@ -187,8 +157,8 @@ int main(int argc, char** argv) try {
   }
 
   // Energy drift after the relaxation.
-  const auto rows = read_conserved((std::filesystem::path(args.out) / "conserved.csv").string());
-  const EnergyRow* e0 = nullptr;
+  const auto rows = rubble::verification::read_conserved_csv((std::filesystem::path(args.out) / "conserved.csv").string());
+  const ConservedRow* e0 = nullptr;
   for (const auto& r : rows)
     if (!e0 && r.t >= t_relax * (1 - 1e-9)) e0 = &r;
   if (!e0) throw std::runtime_error("conserved.csv has no row after the relaxation");
@@ -196,7 +166,7 @@ int main(int argc, char** argv) try {
   std::vector<double> et, etot, ekin, eint, egrav;
   const std::size_t stride = std::max<std::size_t>(1, rows.size() / 400);
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    const EnergyRow& r = rows[i];
+    const ConservedRow& r = rows[i];
     if (r.t >= e0->t && r.t <= t_stop * (1 + 1e-9)) drift = std::max(drift, std::fabs(r.total - e0->total) / std::fabs(e0->total));
     if (i % stride == 0 || i + 1 == rows.size()) {
       et.push_back(r.t);
