@@ -527,13 +527,16 @@ struct CudaStepper<D>::Impl {
       for_each_index("summation density", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
         each.a = std::uint32_t(i);
-        const bool ok = summation_density_particle<D>(c, std::uint32_t(i), R[i], each);
-        if (!ok) R[i] = kSkin * c.s.h[i];
-        flag[i] = ok ? 0 : 1;
+        // R is read by every thread's neighbour walk: grown radii are
+        // written only after this kernel (below), not here
+        flag[i] = summation_density_particle<D>(c, std::uint32_t(i), R[i], each) ? 0 : 1;
       });
       const int outgrown = reduce_index<int>(count, [=] __device__(std::size_t i) { return flag[i]; }, 0,
                                              thrust::plus<int>());
       if (outgrown == 0) return;
+      for_each_index("grown search radius", count, [=] __device__(std::size_t i) {
+        if (flag[i]) R[i] = kSkin * c.s.h[i];
+      });
     }
     throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
   }
