@@ -51,6 +51,7 @@
 #include "rubble/io/conserved_sums.hpp"
 #include "rubble/neighbors/morton.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
+#include "rubble/neighbors/uniform_grid.hpp"
 #include "rubble/physics/kernels.hpp"
 #include "rubble/run.hpp"
 
@@ -242,66 +243,6 @@ class DeviceStore {
   std::vector<Field> fields_;
 };
 
-// The `each` of particle_rates.hpp on the device: every particle of the
-// 3^D grid cells around a's cell, kept when |x_a - x_b| < max(R_a, R_b)
-// (minimum image) and b != a - the CPU cell list's criterion.
-template <int D>
-struct GridNeighbors {
-  const Vec<D>* x;
-  const Real* R;
-  const std::uint32_t* order;  // particle indices grouped by cell
-  const std::uint32_t* start;  // first position in `order` of each cell
-  const std::uint32_t* end;    // one past the last
-  Box<D> domain;
-  Vec<D> lo;
-  Real inv_w[D];
-  int G[D];
-  std::uint32_t a;
-
-  RUBBLE_HD int cell_coord(Real xk, int k) const {
-    const Real c = std::floor((xk - lo[k]) * inv_w[k]);
-    return c < Real(0) ? 0 : c > Real(G[k] - 1) ? G[k] - 1 : int(c);
-  }
-
-  template <class F>
-  RUBBLE_HD void operator()(F&& f) const {
-    // the candidate cell coordinates along each axis (each cell once)
-    int cand[D][3], cnt[D];
-    for (int k = 0; k < D; ++k) {
-      const int c = cell_coord(x[a][k], k);
-      cnt[k] = 0;
-      if (domain.periodic[k] && G[k] < 3) {
-        for (int j = 0; j < G[k]; ++j) cand[k][cnt[k]++] = j;
-      } else {
-        for (int o = -1; o <= 1; ++o) {
-          int j = c + o;
-          if (domain.periodic[k]) j = (j + G[k]) % G[k];
-          else if (j < 0 || j >= G[k]) continue;
-          cand[k][cnt[k]++] = j;
-        }
-      }
-    }
-    int total = 1;
-    for (int k = 0; k < D; ++k) total *= cnt[k];
-    const Real Ra = R[a];
-    for (int t = 0; t < total; ++t) {
-      std::size_t lin = 0, stride = 1;
-      int rest = t;
-      for (int k = 0; k < D; ++k) {
-        lin += std::size_t(cand[k][rest % cnt[k]]) * stride;
-        rest /= cnt[k];
-        stride *= std::size_t(G[k]);
-      }
-      for (std::uint32_t j = start[lin]; j < end[lin]; ++j) {
-        const std::uint32_t b = order[j];
-        if (b == a) continue;
-        const Real rb = R[b], rm = Ra > rb ? Ra : rb;
-        if (norm2(domain.separation(x[a], x[b])) < rm * rm) f(b);
-      }
-    }
-  }
-};
-
 // A plain device array of T.
 template <class T>
 struct DeviceArray {
@@ -451,36 +392,17 @@ struct CudaStepper<D>::Impl {
     for (int k = 0; k < D; ++k)
       if (!std::isfinite(mn[k]) || !std::isfinite(mx[k])) throw RunError("non-finite particle position");
     GridNeighbors<D> g{};
-    // cells at least r_max wide; no more cells than a few per particle
-    const double max_cells = std::max(64.0, 4.0 * double(count));
-    for (;;) {
-      double cells = 1;
-      for (int k = 0; k < D; ++k) {
-        if (domain.periodic[k]) {
-          const Real L = domain.length(k);
-          if (r_max > Real(0.5) * L)
-            throw RunError("a search radius exceeds half the periodic length along axis " + std::to_string(k));
-          g.G[k] = std::max(1, int(std::floor(L / r_max)));
-          g.lo[k] = domain.lo[k];
-          g.inv_w[k] = Real(g.G[k]) / L;
-        } else {
-          g.G[k] = int(std::floor((mx[k] - mn[k]) / r_max)) + 1;
-          g.lo[k] = mn[k];
-          g.inv_w[k] = Real(1) / r_max;
-        }
-        cells *= double(g.G[k]);
-      }
-      if (cells <= max_cells) break;
-      r_max *= Real(1.26);  // coarser cells: fewer of them, same neighbours
+    try {
+      g.grid = make_uniform_grid<D>(domain, mn, mx, r_max, std::max(64.0, 4.0 * double(count)));
+    } catch (const std::invalid_argument& e) {
+      throw RunError(e.what());
     }
-    std::size_t cells = 1;
-    for (int k = 0; k < D; ++k) cells *= std::size_t(g.G[k]);
+    const std::size_t cells = g.grid.cell_count();
     cell_start.resize(cells);
     cell_end.resize(cells);
     RUBBLE_CUDA(cudaMemset(cell_start.data(), 0, cells * sizeof(std::uint32_t)));
     RUBBLE_CUDA(cudaMemset(cell_end.data(), 0, cells * sizeof(std::uint32_t)));
 
-    g.domain = domain;
     const StoreView<D> s = store.view();
     g.x = s.x;
     g.R = R;
@@ -491,12 +413,7 @@ struct CudaStepper<D>::Impl {
     std::uint32_t* ord = order.data();
     const GridNeighbors<D> gg = g;
     for_each_index("cell ids", count, [=] __device__(std::size_t i) {
-      std::size_t lin = 0, stride = 1;
-      for (int k = 0; k < D; ++k) {
-        lin += std::size_t(gg.cell_coord(gg.x[i][k], k)) * stride;
-        stride *= std::size_t(gg.G[k]);
-      }
-      cell[i] = lin;
+      cell[i] = gg.grid.cell_of(gg.x[i]);
       ord[i] = std::uint32_t(i);
     });
     thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(cell), thrust::device_pointer_cast(cell + count),
