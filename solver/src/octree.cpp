@@ -2,6 +2,7 @@
 // See rubble/gravity/octree.hpp for the structure and physics/gravity.hpp
 // for the interaction, the multipoles and the opening criterion.
 #include "rubble/gravity/octree.hpp"
+#include "rubble/gravity/octree_build.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,26 +17,7 @@ namespace rubble {
 
 namespace {
 
-constexpr std::uint32_t kMaxLevel = std::uint32_t(morton_bits<3>);  // 21 levels of 3 key bits
-
 [[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("Octree::build: " + what); }
-
-// The octant (3 key bits) that a key selects below a cell of `level`
-// (0 <= level < kMaxLevel): key bits 3(20 - level) .. 3(20 - level) + 2.
-inline unsigned octant(std::uint64_t key, std::uint32_t level) {
-  return unsigned(key >> (3 * (kMaxLevel - 1 - level))) & 7u;
-}
-
-// Inverse of detail::spread_bits_by_2 (morton.hpp): gather every third bit.
-inline std::uint32_t compact_bits_by_2(std::uint64_t v) {
-  v &= 0x1249249249249249ull;
-  v = (v ^ (v >> 2)) & 0x10C30C30C30C30C3ull;
-  v = (v ^ (v >> 4)) & 0x100F00F00F00F00Full;
-  v = (v ^ (v >> 8)) & 0x001F0000FF0000FFull;
-  v = (v ^ (v >> 16)) & 0x001F00000000FFFFull;
-  v = (v ^ (v >> 32)) & 0x00000000001FFFFFull;
-  return std::uint32_t(v);
-}
 
 // The accepted nodes of one group walk, copied out of the tree into one
 // array per component so that the evaluation loop vectorises.
@@ -150,11 +132,8 @@ void Octree::build(const Vec<3>* x, const Real* m, const Real* eps, std::size_t 
 // branch with at most group_size particles (or a leaf) becomes a group.
 std::uint32_t Octree::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t level, bool in_group) {
   const std::uint32_t count = end - begin;
-  // Levels where all particles fall into one octant add nothing: skip them.
-  while (count > options_.leaf_size && level < kMaxLevel &&
-         octant(keys_[begin], level) == octant(keys_[end - 1], level))
-    ++level;
-  const bool leaf = count <= options_.leaf_size || level == kMaxLevel;
+  bool leaf = false;
+  level = octree_split_level(keys_.data(), begin, end, level, options_.leaf_size, leaf);
 
   const std::uint32_t id = std::uint32_t(nodes_.size());
   {
@@ -170,71 +149,22 @@ std::uint32_t Octree::build_node(std::uint32_t begin, std::uint32_t end, std::ui
     in_group = true;
   }
 
-  // Mass and centre of mass: from the particles of a leaf, from the children
-  // of an inner node (whose quadrupoles are shifted to the new centre).
-  Real mass = 0;
-  Vec<3> mx = Vec<3>::zero();
-  Real quad[6] = {0, 0, 0, 0, 0, 0};
+  // Children first (depth first), then this node's moments from them
+  // (octree_build.hpp: the same steps as the level-synchronous build).
+  std::uint32_t child_ids[8];
+  int n_children = 0;
   if (leaf) {
     ++leaves_;
-    for (std::uint32_t s = begin; s < end; ++s) {
-      mass += m_[s];
-      mx += x_[s] * m_[s];
-    }
   } else {
-    std::uint32_t children[8];
-    int n_children = 0;
-    for (std::uint32_t first = begin; first < end;) {
-      const unsigned oct = octant(keys_[first], level);
-      const std::uint32_t last = std::uint32_t(
-          std::partition_point(keys_.begin() + first, keys_.begin() + end,
-                               [&](std::uint64_t key) { return octant(key, level) == oct; }) -
-          keys_.begin());
-      children[n_children++] = build_node(first, last, level + 1, in_group);
-      first = last;
-    }
-    for (int c = 0; c < n_children; ++c) {
-      const OctreeNode& ch = nodes_[children[c]];
-      mass += ch.mass;
-      mx += ch.com * ch.mass;
-    }
-    const Vec<3> com = mass > Real(0) ? mx * (Real(1) / mass) : nodes_[children[0]].com;
-    for (int c = 0; c < n_children; ++c) {
-      const OctreeNode& ch = nodes_[children[c]];
-      for (int j = 0; j < 6; ++j) quad[j] += ch.quad[j];
-      quadrupole_add_point(quad, ch.mass, ch.com - com);
-    }
+    std::uint32_t first[9];
+    n_children = octree_children(keys_.data(), begin, end, level, first);
+    for (int c = 0; c < n_children; ++c) child_ids[c] = build_node(first[c], first[c + 1], level + 1, in_group);
   }
-
-  // The cell of the node's key prefix.
-  Vec<3> lo, hi;
-  cell_bounds(id, lo, hi);
-  Real side = 0;
-  Vec<3> centre;
-  for (int k = 0; k < 3; ++k) {
-    centre[k] = Real(0.5) * (lo[k] + hi[k]);
-    side = std::max(side, hi[k] - lo[k]);
-  }
-
-  OctreeNode& nd = nodes_[id];
-  nd.mass = mass;
-  if (mass > Real(0)) {
-    nd.com = mx * (Real(1) / mass);
-  } else {  // massless particles: expand about the cell centre
-    nd.com = centre;
-  }
-  Real b_max = 0, eps_max = 0;
-  for (std::uint32_t s = begin; s < end; ++s) {
-    const Vec<3> d = x_[s] - nd.com;
-    b_max = std::max(b_max, norm2(d));
-    eps_max = std::max(eps_max, eps_[s]);
-    if (leaf) quadrupole_add_point(quad, m_[s], d);
-  }
-  for (int j = 0; j < 6; ++j) nd.quad[j] = quad[j];
-  nd.b_max = std::sqrt(b_max);
-  nd.eps_max = eps_max;
-  nd.open_radius = opening_radius(side, nd.com - centre, options_.theta);
-  nd.skip = std::uint32_t(nodes_.size());
+  const OctreeNode* children[8];
+  for (int c = 0; c < n_children; ++c) children[c] = &nodes_[child_ids[c]];  // nodes_ no longer grows here
+  octree_finish_node(nodes_[id], children, n_children, x_.data(), m_.data(), eps_.data(), box_, keys_[begin],
+                     options_.theta);
+  nodes_[id].skip = std::uint32_t(nodes_.size());
   return id;
 }
 
@@ -242,13 +172,7 @@ std::uint32_t Octree::build_node(std::uint32_t begin, std::uint32_t end, std::ui
 // coordinates at its level -> the cell's corners in the key box.
 void Octree::cell_bounds(std::uint32_t node, Vec<3>& lo, Vec<3>& hi) const {
   const OctreeNode& nd = nodes_[node];
-  const std::uint32_t shift = kMaxLevel - nd.level;
-  for (int k = 0; k < 3; ++k) {
-    const std::uint64_t cell = std::uint64_t(compact_bits_by_2(keys_[nd.begin] >> k)) >> shift;
-    const Real len = (box_.hi[k] - box_.lo[k]) / Real(std::uint64_t(1) << nd.level);
-    lo[k] = box_.lo[k] + Real(cell) * len;
-    hi[k] = lo[k] + len;
-  }
+  octree_cell_bounds(box_, keys_[nd.begin], nd.level, lo, hi);
 }
 
 OctreeView Octree::view() const {
