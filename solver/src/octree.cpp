@@ -92,14 +92,7 @@ void Octree::build(const Vec<3>* x, const Real* m, const Real* eps, std::size_t 
   // elongated cells carry a quadrupole that the opening angle does not see
   // (measured on the Plummer sphere, theta = 0.3: median monopole error
   // 3.7e-4 with the elongated cells of the bounding box, 3.0e-4 with cubes).
-  box_ = bounding_box<3>(x, n, Box<3>{});
-  Real side = 0;
-  for (int k = 0; k < 3; ++k) side = std::max(side, box_.hi[k] - box_.lo[k]);
-  for (int k = 0; k < 3; ++k) {
-    const Real mid = Real(0.5) * (box_.lo[k] + box_.hi[k]);
-    box_.lo[k] = mid - Real(0.5) * side;
-    box_.hi[k] = mid + Real(0.5) * side;
-  }
+  box_ = octree_key_box(bounding_box<3>(x, n, Box<3>{}));
   std::vector<std::uint64_t> keys(n);
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) keys[i] = morton_key<3>(x[i], box_);

@@ -28,6 +28,7 @@
 #include <thrust/functional.h>
 #include <thrust/iterator/counting_iterator.h>
 #include <thrust/reduce.h>
+#include <thrust/scan.h>
 #include <thrust/sequence.h>
 #include <thrust/sort.h>
 #include <thrust/transform_reduce.h>
@@ -46,6 +47,8 @@
 #include "rubble/drivers/material_params.hpp"
 #include "rubble/drivers/particle_rates.hpp"
 #include "rubble/gravity/direct.hpp"
+#include "rubble/gravity/octree.hpp"
+#include "rubble/gravity/octree_build.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_sums.hpp"
@@ -281,6 +284,14 @@ struct CudaStepper<D>::Impl {
   DeviceArray<Real> u_half, rho_half;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
+  // Barnes-Hut (3-D): the tree's own key order and sorted copies
+  DeviceArray<std::uint64_t> tree_keys;
+  DeviceArray<std::uint32_t> tree_order, tree_counts, tree_offsets;
+  DeviceArray<Vec<3>> tree_x;
+  DeviceArray<Real> tree_m, tree_eps;
+  DeviceArray<OctreePending> tree_frontier[2];
+  std::vector<DeviceArray<OctreeLevelNode>> tree_levels;
+  DeviceArray<OctreeNode> tree_nodes;
   std::int64_t fallbacks_total = 0, evaluations = 0, rebuilds = 0;
   bool host_current = true;
 
@@ -300,10 +311,6 @@ struct CudaStepper<D>::Impl {
     if (err != cudaSuccess || devices == 0)
       throw RunError(std::string("--backend cuda: no CUDA device available (") +
                      (err != cudaSuccess ? cudaGetErrorString(err) : "device count 0") + ")");
-    if (gravity.mode == GravityMode::BarnesHut)
-      throw RunError(
-          "gravity.mode = \"barnes_hut\" has no CUDA driver yet (issue #6: the device octree is still to be "
-          "written); run it with --backend cpu, or use gravity.mode = \"direct\" on the GPU");
     if (ps.n > std::numeric_limits<std::uint32_t>::max()) throw RunError("more than 2^32 - 1 particles");
     for (const MaterialParams& m : materials_host) {
       solid = solid || m.shear_modulus > Real(0);
@@ -496,6 +503,7 @@ struct CudaStepper<D>::Impl {
       });
     }
     if (gravity.mode == GravityMode::Direct) self_gravity(c);
+    else if (gravity.mode == GravityMode::BarnesHut) barnes_hut(c);
     if (c.s.boundary)
       for_each_index("hold boundaries", count,
                      [=] __device__(std::size_t i) { hold_boundary_particle<D>(c, std::uint32_t(i)); });
@@ -520,6 +528,144 @@ struct CudaStepper<D>::Impl {
       const Real G = Real(gravity.G);
       for_each_index("direct gravity", count, [=] __device__(std::size_t i) {
         const GravityField f = direct_field_of_particle(s.x, s.m, e, count, k, i);
+        s.a_grav[i] = f.a * G;
+        s.phi[i] = f.phi * G;
+        s.dvdt[i] += s.a_grav[i];
+      });
+    } else {
+      (void)c;
+      throw RunError("self-gravity needs a 3-D scene");
+    }
+  }
+
+  // Barnes-Hut on the device (3-D): the octree of gravity/octree_build.hpp
+  // built level by level over the particles sorted by the tree's own keys
+  // (the cube around their bounding box, as Octree::build), then one walk
+  // per particle (octree_field, as Octree with group_size 0 or 1). Same tree
+  // as the CPU's, node for node; with the CPU's default group walk the
+  // fields differ by the multipole error, not by rounding.
+  void barnes_hut(const RhsContext<D>& c) {
+    if constexpr (D == 3) {
+      const std::size_t count = n();
+      const std::uint32_t n32 = std::uint32_t(count);
+      const StoreView<3> s = c.s;
+      // softening lengths, in store order
+      eps.resize(count);
+      Real* e = eps.data();
+      const bool fixed = gravity.softening == GravitySoftening::Fixed;
+      const Real eps_fixed = Real(gravity.softening_length);
+      for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
+      // the tree's keys and sorted copies
+      Vec<3> mn, mx;
+      extent(mn, mx);
+      const Box<3> kb = octree_key_box(bounding_box_from_extent<3>(Box<3>{}, mn, mx));
+      tree_keys.resize(count);
+      tree_order.resize(count);
+      tree_x.resize(count);
+      tree_m.resize(count);
+      tree_eps.resize(count);
+      std::uint64_t* k = tree_keys.data();
+      std::uint32_t* o = tree_order.data();
+      for_each_index("tree keys", count, [=] __device__(std::size_t i) {
+        k[i] = morton_key<3>(s.x[i], kb);
+        o[i] = std::uint32_t(i);
+      });
+      thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
+                          thrust::device_pointer_cast(o));
+      cuda::check(cudaGetLastError(), "thrust::sort_by_key (tree keys)", __FILE__, __LINE__);
+      Vec<3>* tx = tree_x.data();
+      Real* tm = tree_m.data();
+      Real* te = tree_eps.data();
+      for_each_index("tree gather", count, [=] __device__(std::size_t j) {
+        tx[j] = s.x[o[j]];
+        tm[j] = s.m[o[j]];
+        te[j] = e[o[j]];
+      });
+
+      // 1. discovery, level by level
+      const std::uint32_t leaf_size = std::uint32_t(gravity.leaf_size);
+      tree_levels.clear();
+      int cur = 0;
+      tree_frontier[cur].resize(1);
+      const OctreePending root{0, n32, 0, 0xFFFFFFFFu};
+      RUBBLE_CUDA(cudaMemcpy(tree_frontier[cur].data(), &root, sizeof root, cudaMemcpyHostToDevice));
+      std::size_t F = 1;
+      while (F > 0) {
+        tree_levels.emplace_back();
+        tree_levels.back().resize(F);
+        tree_counts.resize(F);
+        tree_offsets.resize(F);
+        OctreeLevelNode* lv = tree_levels.back().data();
+        const OctreePending* fr = tree_frontier[cur].data();
+        std::uint32_t* cnt = tree_counts.data();
+        std::uint32_t* off = tree_offsets.data();
+        for_each_index("octree discovery", F, [=] __device__(std::size_t i) {
+          std::uint32_t first[9];
+          cnt[i] = octree_discover(k, fr[i], leaf_size, lv[i], first);
+        });
+        thrust::exclusive_scan(thrust::device, thrust::device_pointer_cast(cnt), thrust::device_pointer_cast(cnt + F),
+                               thrust::device_pointer_cast(off));
+        cuda::check(cudaGetLastError(), "thrust::exclusive_scan (octree children)", __FILE__, __LINE__);
+        std::uint32_t last_off = 0, last_cnt = 0;
+        RUBBLE_CUDA(cudaMemcpy(&last_off, off + F - 1, sizeof last_off, cudaMemcpyDeviceToHost));
+        RUBBLE_CUDA(cudaMemcpy(&last_cnt, cnt + F - 1, sizeof last_cnt, cudaMemcpyDeviceToHost));
+        const std::size_t total = std::size_t(last_off) + last_cnt;
+        tree_frontier[1 - cur].resize(std::max<std::size_t>(total, 1));
+        OctreePending* nx = tree_frontier[1 - cur].data();
+        for_each_index("octree children", F, [=] __device__(std::size_t i) {
+          lv[i].first_child = off[i];
+          if (cnt[i] == 0) return;
+          std::uint32_t first[9];
+          octree_children(k, lv[i].node.begin, lv[i].node.end, lv[i].node.level, first);
+          for (std::uint32_t c = 0; c < cnt[i]; ++c)
+            nx[off[i] + c] = OctreePending{first[c], first[c + 1], lv[i].node.level + 1, std::uint32_t(i)};
+        });
+        cur = 1 - cur;
+        F = total;
+      }
+      const std::size_t L = tree_levels.size();
+      // 2. subtree sizes, bottom up
+      for (std::size_t l = L; l-- > 1;) {
+        const OctreeLevelNode* lv = tree_levels[l].data();
+        OctreeLevelNode* up = tree_levels[l - 1].data();
+        for_each_index("octree sizes", tree_levels[l].n, [=] __device__(std::size_t i) {
+          atomicAdd(reinterpret_cast<unsigned int*>(&up[lv[i].parent].size), unsigned(lv[i].size));
+        });
+      }
+      // 3. depth-first ids, top down
+      for (std::size_t l = 0; l + 1 < L; ++l) {
+        const OctreeLevelNode* lv = tree_levels[l].data();
+        OctreeLevelNode* down = tree_levels[l + 1].data();
+        for_each_index("octree ids", tree_levels[l].n,
+                       [=] __device__(std::size_t i) { octree_number_children(lv[i], down); });
+      }
+      OctreeLevelNode root_node;
+      RUBBLE_CUDA(cudaMemcpy(&root_node, tree_levels[0].data(), sizeof root_node, cudaMemcpyDeviceToHost));
+      const std::uint32_t node_count = root_node.size;
+      tree_nodes.resize(node_count);
+      OctreeNode* nodes = tree_nodes.data();
+      // 4. moments bottom up, into the depth-first array
+      const Real theta = Real(gravity.theta);
+      for (std::size_t l = L; l-- > 0;) {
+        OctreeLevelNode* lv = tree_levels[l].data();
+        const OctreeLevelNode* next = l + 1 < L ? tree_levels[l + 1].data() : nullptr;
+        for_each_index("octree moments", tree_levels[l].n, [=] __device__(std::size_t i) {
+          nodes[lv[i].id] = octree_finish_level_node(lv[i], next, k, tx, tm, te, kb, theta);
+        });
+      }
+      // 5. one walk per particle
+      OctreeView view;
+      view.nodes = nodes;
+      view.node_count = node_count;
+      view.x = tx;
+      view.m = tm;
+      view.eps = te;
+      view.kernel = kernel;
+      view.order = gravity.order;
+      const Real G = Real(gravity.G);
+      for_each_index("octree walk", count, [=] __device__(std::size_t j) {
+        const GravityField f = octree_field(view, tx[j], te[j], std::uint32_t(j));
+        const std::uint32_t i = o[j];
         s.a_grav[i] = f.a * G;
         s.phi[i] = f.phi * G;
         s.dvdt[i] += s.a_grav[i];

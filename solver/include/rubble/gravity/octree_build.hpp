@@ -139,76 +139,125 @@ RUBBLE_HD_INLINE void octree_finish_node(OctreeNode& nd, const OctreeNode* const
   nd.open_radius = opening_radius(side, nd.com - centre, theta);
 }
 
-// The level-synchronous build, written as the GPU runs it (one pass over a
-// level's nodes per step; each loop body touches one node), here on the
-// host: keys, x, m, eps sorted by key, key_box the cube they were quantised
-// in. Returns the depth-first node array of the recursive build.
+// The cube the octree's keys are quantised in: the padded bounding box
+// (spatial_order.hpp), made a cube about its centre (octree cells must be
+// cubes; see Octree::build).
+inline Box<3> octree_key_box(const Box<3>& bounding) {
+  Box<3> b = bounding;
+  Real side = 0;
+  for (int k = 0; k < 3; ++k) side = side > b.hi[k] - b.lo[k] ? side : b.hi[k] - b.lo[k];
+  for (int k = 0; k < 3; ++k) {
+    const Real mid = Real(0.5) * (b.lo[k] + b.hi[k]);
+    b.lo[k] = mid - Real(0.5) * side;
+    b.hi[k] = mid + Real(0.5) * side;
+  }
+  return b;
+}
+
+// ---- the level-synchronous build ------------------------------------------
+// Level l of the breadth-first discovery holds the nodes found there; each
+// step below is one loop over a level's nodes with a body that touches one
+// node (one GPU thread each): the host driver octree_build_by_levels and
+// the CUDA driver run the same bodies.
+
+// A node waiting to be discovered: its sorted range, the level it starts
+// at, its parent's index in the previous level.
+struct OctreePending {
+  std::uint32_t begin, end, level, parent;
+};
+
+struct OctreeLevelNode {
+  OctreeNode node;
+  std::uint32_t parent;       // index in the previous level (0xFFFFFFFF: root)
+  std::uint32_t n_children;   // 0 for a leaf
+  std::uint32_t first_child;  // index in the next level (children are contiguous)
+  std::uint32_t size;         // nodes in the subtree
+  std::uint32_t id;           // depth-first index
+};
+
+// Discovery: the node of a pending range; returns its number of children
+// (their ranges in first[0..count]).
+RUBBLE_HD_INLINE std::uint32_t octree_discover(const std::uint64_t* keys, const OctreePending& p,
+                                               std::uint32_t leaf_size, OctreeLevelNode& out, std::uint32_t first[9]) {
+  bool leaf = false;
+  const std::uint32_t level = octree_split_level(keys, p.begin, p.end, p.level, leaf_size, leaf);
+  OctreeNode nd{};
+  nd.begin = p.begin;
+  nd.end = p.end;
+  nd.level = level;
+  nd.leaf = leaf ? 1u : 0u;
+  out.node = nd;
+  out.parent = p.parent;
+  out.n_children = leaf ? 0u : std::uint32_t(octree_children(keys, p.begin, p.end, level, first));
+  out.first_child = 0;
+  out.size = 1;
+  out.id = 0;
+  return out.n_children;
+}
+
+// Depth-first ids of a node's children: each follows its parent and the
+// subtrees of its earlier siblings.
+RUBBLE_HD_INLINE void octree_number_children(const OctreeLevelNode& f, OctreeLevelNode* next_level) {
+  std::uint32_t id = f.id + 1;
+  for (std::uint32_t c = 0; c < f.n_children; ++c) {
+    OctreeLevelNode& ch = next_level[f.first_child + c];
+    ch.id = id;
+    id += ch.size;
+  }
+}
+
+// Moments of a node whose children (in the next level) are finished; its
+// skip index; returns the finished node.
+RUBBLE_HD_INLINE const OctreeNode& octree_finish_level_node(OctreeLevelNode& f, const OctreeLevelNode* next_level,
+                                                            const std::uint64_t* keys, const Vec<3>* x, const Real* m,
+                                                            const Real* eps, const Box<3>& key_box, Real theta) {
+  const OctreeNode* children[8];
+  for (std::uint32_t c = 0; c < f.n_children; ++c) children[c] = &next_level[f.first_child + c].node;
+  octree_finish_node(f.node, children, int(f.n_children), x, m, eps, key_box, keys[f.node.begin], theta);
+  f.node.skip = f.id + f.size;
+  return f.node;
+}
+
+// The host driver: keys, x, m, eps sorted by key, key_box the cube they
+// were quantised in. Returns the depth-first node array of the recursive
+// build (Octree), bit for bit (test_octree_build.cpp).
 inline std::vector<OctreeNode> octree_build_by_levels(const std::uint64_t* keys, const Vec<3>* x, const Real* m,
                                                       const Real* eps, std::uint32_t n, const Box<3>& key_box,
                                                       Real theta, std::uint32_t leaf_size) {
-  struct Pending {
-    std::uint32_t begin, end, level, parent;
-  };
-  struct Found {
-    OctreeNode node;
-    std::uint32_t parent;
-    std::uint32_t n_children = 0, first_child = 0;  // children are contiguous in the next level
-    std::uint32_t size = 1;                         // nodes in the subtree
-    std::uint32_t id = 0;                           // depth-first index
-  };
-  std::vector<std::vector<Found>> levels;
   if (n == 0) return {};
-  // 1. discovery, one level of the BFS at a time
-  std::vector<Pending> frontier = {{0, n, 0, 0xFFFFFFFFu}};
+  std::vector<std::vector<OctreeLevelNode>> levels;
+  // 1. discovery, one level at a time (on a GPU, next-level offsets come
+  //    from an exclusive scan of the child counts)
+  std::vector<OctreePending> frontier = {{0, n, 0, 0xFFFFFFFFu}};
   while (!frontier.empty()) {
-    std::vector<Found> found(frontier.size());
-    std::vector<Pending> next;
-    for (std::size_t i = 0; i < frontier.size(); ++i) {  // one GPU thread each
-      const Pending& p = frontier[i];
-      bool leaf = false;
-      const std::uint32_t level = octree_split_level(keys, p.begin, p.end, p.level, leaf_size, leaf);
-      OctreeNode nd{};
-      nd.begin = p.begin;
-      nd.end = p.end;
-      nd.level = level;
-      nd.leaf = leaf ? 1u : 0u;
-      found[i].node = nd;
-      found[i].parent = p.parent;
-      if (!leaf) {
-        std::uint32_t first[9];
-        const int c = octree_children(keys, p.begin, p.end, level, first);
-        found[i].first_child = std::uint32_t(next.size());  // on a GPU: an exclusive scan of the counts
-        found[i].n_children = std::uint32_t(c);
-        for (int k = 0; k < c; ++k) next.push_back({first[k], first[k + 1], level + 1, std::uint32_t(i)});
-      }
+    std::vector<OctreeLevelNode> level(frontier.size());
+    std::vector<OctreePending> next;
+    for (std::size_t i = 0; i < frontier.size(); ++i) {
+      std::uint32_t first[9];
+      const std::uint32_t c = octree_discover(keys, frontier[i], leaf_size, level[i], first);
+      level[i].first_child = std::uint32_t(next.size());
+      for (std::uint32_t k = 0; k < c; ++k)
+        next.push_back({first[k], first[k + 1], level[i].node.level + 1, std::uint32_t(i)});
     }
-    levels.push_back(std::move(found));
+    levels.push_back(std::move(level));
     frontier = std::move(next);
   }
-  // 2. subtree sizes, bottom up
+  // 2. subtree sizes, bottom up (on a GPU: atomic adds into the parents)
   for (std::size_t l = levels.size(); l-- > 1;)
-    for (const Found& f : levels[l]) levels[l - 1][f.parent].size += f.size;
-  // 3. depth-first ids, top down: a child follows its parent and its earlier siblings' subtrees
+    for (const OctreeLevelNode& f : levels[l]) levels[l - 1][f.parent].size += f.size;
+  // 3. depth-first ids, top down
   levels[0][0].id = 0;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l)
-    for (Found& f : levels[l]) {
-      std::uint32_t id = f.id + 1;
-      for (std::uint32_t c = 0; c < f.n_children; ++c) {
-        Found& ch = levels[l + 1][f.first_child + c];
-        ch.id = id;
-        id += ch.size;
-      }
-    }
-  // 4. moments, bottom up; 5. the depth-first array
+    for (const OctreeLevelNode& f : levels[l]) octree_number_children(f, levels[l + 1].data());
+  // 4. moments bottom up, into the depth-first array
   std::vector<OctreeNode> out(levels[0][0].size);
-  for (std::size_t l = levels.size(); l-- > 0;)
-    for (Found& f : levels[l]) {
-      const OctreeNode* children[8];
-      for (std::uint32_t c = 0; c < f.n_children; ++c) children[c] = &levels[l + 1][f.first_child + c].node;
-      octree_finish_node(f.node, children, int(f.n_children), x, m, eps, key_box, keys[f.node.begin], theta);
-      f.node.skip = f.id + f.size;
-      out[f.id] = f.node;
+  for (std::size_t l = levels.size(); l-- > 0;) {
+    const OctreeLevelNode* next = l + 1 < levels.size() ? levels[l + 1].data() : nullptr;
+    for (OctreeLevelNode& f : levels[l]) {
+      const OctreeNode& nd = octree_finish_level_node(f, next, keys, x, m, eps, key_box, theta);
+      out[f.id] = nd;
     }
+  }
   return out;
 }
 
