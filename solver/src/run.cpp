@@ -14,6 +14,7 @@
 #include "cuda/cuda_stepper.hpp"
 #endif
 #include "rubble/core/error.hpp"
+#include "rubble/gravity/device_gravity.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_log.hpp"
@@ -273,6 +274,11 @@ bool backend_built(Backend b) {
 
 #ifndef RUBBLE_HAVE_CUDA
 std::string gpu_description() { return "none (CPU-only build)"; }
+
+DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>*, const Real*, const Real*, std::size_t, const GravityConfig&,
+                                          KernelType, Vec<3>*, Real*) {
+  throw RunError("cuda_barnes_hut_field: this build has no CUDA backend (configure with -DRUBBLE_CUDA=ON)");
+}
 #endif
 
 Backend default_backend() {

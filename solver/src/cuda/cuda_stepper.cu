@@ -34,6 +34,7 @@
 #include <thrust/transform_reduce.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -49,6 +50,7 @@
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
 #include "rubble/gravity/octree_build.hpp"
+#include "rubble/gravity/device_gravity.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_sums.hpp"
@@ -258,6 +260,161 @@ struct DeviceArray {
   T* data() const { return buf.as<T>(); }
 };
 
+// Barnes-Hut on the device: the octree of gravity/octree_build.hpp built
+// level by level over the particles sorted by the tree's own keys (the cube
+// around their bounding box, as Octree::build), then one walk per particle
+// (octree_field, as Octree with group_size 0 or 1). The same tree as the
+// CPU's, node for node; with the CPU's default group walk the fields differ
+// by the multipole error, not by rounding.
+class DeviceOctree {
+ public:
+  // Field of n particles (device arrays x, m, eps; store order) times G:
+  // a_grav and phi written, a_grav added to dvdt when dvdt is not null.
+  // Build and walk times (device-synchronised) go to *timing when given.
+  void field(const Vec<3>* x, const Real* m, const Real* e, std::size_t count, const GravityConfig& gravity,
+             KernelType kernel, Vec<3>* a_grav, Real* phi, Vec<3>* dvdt, DeviceGravityTiming* timing = nullptr) {
+    if (count == 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::uint32_t n32 = std::uint32_t(count);
+    // the tree's keys and sorted copies
+    Vec<3> mn, mx;
+    for (int k = 0; k < 3; ++k) {
+      mn[k] = reduce_index<Real>(count, [=] __device__(std::size_t i) { return x[i][k]; },
+                                 std::numeric_limits<Real>::max(), thrust::minimum<Real>());
+      mx[k] = reduce_index<Real>(count, [=] __device__(std::size_t i) { return x[i][k]; },
+                                 std::numeric_limits<Real>::lowest(), thrust::maximum<Real>());
+    }
+    const Box<3> kb = octree_key_box(bounding_box_from_extent<3>(Box<3>{}, mn, mx));
+    keys_.resize(count);
+    order_.resize(count);
+    x_.resize(count);
+    m_.resize(count);
+    eps_.resize(count);
+    std::uint64_t* k = keys_.data();
+    std::uint32_t* o = order_.data();
+    for_each_index("tree keys", count, [=] __device__(std::size_t i) {
+      k[i] = morton_key<3>(x[i], kb);
+      o[i] = std::uint32_t(i);
+    });
+    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
+                        thrust::device_pointer_cast(o));
+    cuda::check(cudaGetLastError(), "thrust::sort_by_key (tree keys)", __FILE__, __LINE__);
+    Vec<3>* tx = x_.data();
+    Real* tm = m_.data();
+    Real* te = eps_.data();
+    for_each_index("tree gather", count, [=] __device__(std::size_t j) {
+      tx[j] = x[o[j]];
+      tm[j] = m[o[j]];
+      te[j] = e[o[j]];
+    });
+
+    // 1. discovery, level by level
+    const std::uint32_t leaf_size = std::uint32_t(gravity.leaf_size);
+    levels_.clear();
+    int cur = 0;
+    frontier_[cur].resize(1);
+    const OctreePending root{0, n32, 0, 0xFFFFFFFFu};
+    RUBBLE_CUDA(cudaMemcpy(frontier_[cur].data(), &root, sizeof root, cudaMemcpyHostToDevice));
+    std::size_t F = 1;
+    while (F > 0) {
+      levels_.emplace_back();
+      levels_.back().resize(F);
+      counts_.resize(F);
+      offsets_.resize(F);
+      OctreeLevelNode* lv = levels_.back().data();
+      const OctreePending* fr = frontier_[cur].data();
+      std::uint32_t* cnt = counts_.data();
+      std::uint32_t* off = offsets_.data();
+      for_each_index("octree discovery", F, [=] __device__(std::size_t i) {
+        std::uint32_t first[9];
+        cnt[i] = octree_discover(k, fr[i], leaf_size, lv[i], first);
+      });
+      thrust::exclusive_scan(thrust::device, thrust::device_pointer_cast(cnt), thrust::device_pointer_cast(cnt + F),
+                             thrust::device_pointer_cast(off));
+      cuda::check(cudaGetLastError(), "thrust::exclusive_scan (octree children)", __FILE__, __LINE__);
+      std::uint32_t last_off = 0, last_cnt = 0;
+      RUBBLE_CUDA(cudaMemcpy(&last_off, off + F - 1, sizeof last_off, cudaMemcpyDeviceToHost));
+      RUBBLE_CUDA(cudaMemcpy(&last_cnt, cnt + F - 1, sizeof last_cnt, cudaMemcpyDeviceToHost));
+      const std::size_t total = std::size_t(last_off) + last_cnt;
+      frontier_[1 - cur].resize(std::max<std::size_t>(total, 1));
+      OctreePending* nx = frontier_[1 - cur].data();
+      for_each_index("octree children", F, [=] __device__(std::size_t i) {
+        lv[i].first_child = off[i];
+        if (cnt[i] == 0) return;
+        std::uint32_t first[9];
+        octree_children(k, lv[i].node.begin, lv[i].node.end, lv[i].node.level, first);
+        for (std::uint32_t c = 0; c < cnt[i]; ++c)
+          nx[off[i] + c] = OctreePending{first[c], first[c + 1], lv[i].node.level + 1, std::uint32_t(i)};
+      });
+      cur = 1 - cur;
+      F = total;
+    }
+    const std::size_t L = levels_.size();
+    // 2. subtree sizes, bottom up
+    for (std::size_t l = L; l-- > 1;) {
+      const OctreeLevelNode* lv = levels_[l].data();
+      OctreeLevelNode* up = levels_[l - 1].data();
+      for_each_index("octree sizes", levels_[l].n, [=] __device__(std::size_t i) {
+        atomicAdd(reinterpret_cast<unsigned int*>(&up[lv[i].parent].size), unsigned(lv[i].size));
+      });
+    }
+    // 3. depth-first ids, top down
+    for (std::size_t l = 0; l + 1 < L; ++l) {
+      const OctreeLevelNode* lv = levels_[l].data();
+      OctreeLevelNode* down = levels_[l + 1].data();
+      for_each_index("octree ids", levels_[l].n, [=] __device__(std::size_t i) { octree_number_children(lv[i], down); });
+    }
+    OctreeLevelNode root_node;
+    RUBBLE_CUDA(cudaMemcpy(&root_node, levels_[0].data(), sizeof root_node, cudaMemcpyDeviceToHost));
+    const std::uint32_t node_count = root_node.size;
+    nodes_.resize(node_count);
+    OctreeNode* nodes = nodes_.data();
+    // 4. moments bottom up, into the depth-first array
+    const Real theta = Real(gravity.theta);
+    for (std::size_t l = L; l-- > 0;) {
+      OctreeLevelNode* lv = levels_[l].data();
+      const OctreeLevelNode* next = l + 1 < L ? levels_[l + 1].data() : nullptr;
+      for_each_index("octree moments", levels_[l].n, [=] __device__(std::size_t i) {
+        nodes[lv[i].id] = octree_finish_level_node(lv[i], next, k, tx, tm, te, kb, theta);
+      });
+    }
+    RUBBLE_CUDA(cudaDeviceSynchronize());
+    const auto t1 = std::chrono::steady_clock::now();
+    // 5. one walk per particle
+    OctreeView view;
+    view.nodes = nodes;
+    view.node_count = node_count;
+    view.x = tx;
+    view.m = tm;
+    view.eps = te;
+    view.kernel = kernel;
+    view.order = gravity.order;
+    const Real G = Real(gravity.G);
+    for_each_index("octree walk", count, [=] __device__(std::size_t j) {
+      const GravityField f = octree_field(view, tx[j], te[j], std::uint32_t(j));
+      const std::uint32_t i = o[j];
+      a_grav[i] = f.a * G;
+      if (phi) phi[i] = f.phi * G;
+      if (dvdt) dvdt[i] += a_grav[i];
+    });
+    if (timing) {
+      RUBBLE_CUDA(cudaDeviceSynchronize());
+      timing->build_seconds = std::chrono::duration<double>(t1 - t0).count();
+      timing->walk_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      timing->nodes = node_count;
+    }
+  }
+
+ private:
+  DeviceArray<std::uint64_t> keys_;
+  DeviceArray<std::uint32_t> order_, counts_, offsets_;
+  DeviceArray<Vec<3>> x_;
+  DeviceArray<Real> m_, eps_;
+  DeviceArray<OctreePending> frontier_[2];
+  std::vector<DeviceArray<OctreeLevelNode>> levels_;
+  DeviceArray<OctreeNode> nodes_;
+};
+
 }  // namespace
 
 template <int D>
@@ -284,14 +441,7 @@ struct CudaStepper<D>::Impl {
   DeviceArray<Real> u_half, rho_half;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
-  // Barnes-Hut (3-D): the tree's own key order and sorted copies
-  DeviceArray<std::uint64_t> tree_keys;
-  DeviceArray<std::uint32_t> tree_order, tree_counts, tree_offsets;
-  DeviceArray<Vec<3>> tree_x;
-  DeviceArray<Real> tree_m, tree_eps;
-  DeviceArray<OctreePending> tree_frontier[2];
-  std::vector<DeviceArray<OctreeLevelNode>> tree_levels;
-  DeviceArray<OctreeNode> tree_nodes;
+  DeviceOctree octree;  // Barnes-Hut (3-D)
   std::int64_t fallbacks_total = 0, evaluations = 0, rebuilds = 0;
   bool host_current = true;
 
@@ -538,138 +688,17 @@ struct CudaStepper<D>::Impl {
     }
   }
 
-  // Barnes-Hut on the device (3-D): the octree of gravity/octree_build.hpp
-  // built level by level over the particles sorted by the tree's own keys
-  // (the cube around their bounding box, as Octree::build), then one walk
-  // per particle (octree_field, as Octree with group_size 0 or 1). Same tree
-  // as the CPU's, node for node; with the CPU's default group walk the
-  // fields differ by the multipole error, not by rounding.
+  // Barnes-Hut on the device (3-D): DeviceOctree above.
   void barnes_hut(const RhsContext<D>& c) {
     if constexpr (D == 3) {
       const std::size_t count = n();
-      const std::uint32_t n32 = std::uint32_t(count);
-      const StoreView<3> s = c.s;
-      // softening lengths, in store order
       eps.resize(count);
       Real* e = eps.data();
       const bool fixed = gravity.softening == GravitySoftening::Fixed;
       const Real eps_fixed = Real(gravity.softening_length);
+      const StoreView<3> s = c.s;
       for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
-      // the tree's keys and sorted copies
-      Vec<3> mn, mx;
-      extent(mn, mx);
-      const Box<3> kb = octree_key_box(bounding_box_from_extent<3>(Box<3>{}, mn, mx));
-      tree_keys.resize(count);
-      tree_order.resize(count);
-      tree_x.resize(count);
-      tree_m.resize(count);
-      tree_eps.resize(count);
-      std::uint64_t* k = tree_keys.data();
-      std::uint32_t* o = tree_order.data();
-      for_each_index("tree keys", count, [=] __device__(std::size_t i) {
-        k[i] = morton_key<3>(s.x[i], kb);
-        o[i] = std::uint32_t(i);
-      });
-      thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
-                          thrust::device_pointer_cast(o));
-      cuda::check(cudaGetLastError(), "thrust::sort_by_key (tree keys)", __FILE__, __LINE__);
-      Vec<3>* tx = tree_x.data();
-      Real* tm = tree_m.data();
-      Real* te = tree_eps.data();
-      for_each_index("tree gather", count, [=] __device__(std::size_t j) {
-        tx[j] = s.x[o[j]];
-        tm[j] = s.m[o[j]];
-        te[j] = e[o[j]];
-      });
-
-      // 1. discovery, level by level
-      const std::uint32_t leaf_size = std::uint32_t(gravity.leaf_size);
-      tree_levels.clear();
-      int cur = 0;
-      tree_frontier[cur].resize(1);
-      const OctreePending root{0, n32, 0, 0xFFFFFFFFu};
-      RUBBLE_CUDA(cudaMemcpy(tree_frontier[cur].data(), &root, sizeof root, cudaMemcpyHostToDevice));
-      std::size_t F = 1;
-      while (F > 0) {
-        tree_levels.emplace_back();
-        tree_levels.back().resize(F);
-        tree_counts.resize(F);
-        tree_offsets.resize(F);
-        OctreeLevelNode* lv = tree_levels.back().data();
-        const OctreePending* fr = tree_frontier[cur].data();
-        std::uint32_t* cnt = tree_counts.data();
-        std::uint32_t* off = tree_offsets.data();
-        for_each_index("octree discovery", F, [=] __device__(std::size_t i) {
-          std::uint32_t first[9];
-          cnt[i] = octree_discover(k, fr[i], leaf_size, lv[i], first);
-        });
-        thrust::exclusive_scan(thrust::device, thrust::device_pointer_cast(cnt), thrust::device_pointer_cast(cnt + F),
-                               thrust::device_pointer_cast(off));
-        cuda::check(cudaGetLastError(), "thrust::exclusive_scan (octree children)", __FILE__, __LINE__);
-        std::uint32_t last_off = 0, last_cnt = 0;
-        RUBBLE_CUDA(cudaMemcpy(&last_off, off + F - 1, sizeof last_off, cudaMemcpyDeviceToHost));
-        RUBBLE_CUDA(cudaMemcpy(&last_cnt, cnt + F - 1, sizeof last_cnt, cudaMemcpyDeviceToHost));
-        const std::size_t total = std::size_t(last_off) + last_cnt;
-        tree_frontier[1 - cur].resize(std::max<std::size_t>(total, 1));
-        OctreePending* nx = tree_frontier[1 - cur].data();
-        for_each_index("octree children", F, [=] __device__(std::size_t i) {
-          lv[i].first_child = off[i];
-          if (cnt[i] == 0) return;
-          std::uint32_t first[9];
-          octree_children(k, lv[i].node.begin, lv[i].node.end, lv[i].node.level, first);
-          for (std::uint32_t c = 0; c < cnt[i]; ++c)
-            nx[off[i] + c] = OctreePending{first[c], first[c + 1], lv[i].node.level + 1, std::uint32_t(i)};
-        });
-        cur = 1 - cur;
-        F = total;
-      }
-      const std::size_t L = tree_levels.size();
-      // 2. subtree sizes, bottom up
-      for (std::size_t l = L; l-- > 1;) {
-        const OctreeLevelNode* lv = tree_levels[l].data();
-        OctreeLevelNode* up = tree_levels[l - 1].data();
-        for_each_index("octree sizes", tree_levels[l].n, [=] __device__(std::size_t i) {
-          atomicAdd(reinterpret_cast<unsigned int*>(&up[lv[i].parent].size), unsigned(lv[i].size));
-        });
-      }
-      // 3. depth-first ids, top down
-      for (std::size_t l = 0; l + 1 < L; ++l) {
-        const OctreeLevelNode* lv = tree_levels[l].data();
-        OctreeLevelNode* down = tree_levels[l + 1].data();
-        for_each_index("octree ids", tree_levels[l].n,
-                       [=] __device__(std::size_t i) { octree_number_children(lv[i], down); });
-      }
-      OctreeLevelNode root_node;
-      RUBBLE_CUDA(cudaMemcpy(&root_node, tree_levels[0].data(), sizeof root_node, cudaMemcpyDeviceToHost));
-      const std::uint32_t node_count = root_node.size;
-      tree_nodes.resize(node_count);
-      OctreeNode* nodes = tree_nodes.data();
-      // 4. moments bottom up, into the depth-first array
-      const Real theta = Real(gravity.theta);
-      for (std::size_t l = L; l-- > 0;) {
-        OctreeLevelNode* lv = tree_levels[l].data();
-        const OctreeLevelNode* next = l + 1 < L ? tree_levels[l + 1].data() : nullptr;
-        for_each_index("octree moments", tree_levels[l].n, [=] __device__(std::size_t i) {
-          nodes[lv[i].id] = octree_finish_level_node(lv[i], next, k, tx, tm, te, kb, theta);
-        });
-      }
-      // 5. one walk per particle
-      OctreeView view;
-      view.nodes = nodes;
-      view.node_count = node_count;
-      view.x = tx;
-      view.m = tm;
-      view.eps = te;
-      view.kernel = kernel;
-      view.order = gravity.order;
-      const Real G = Real(gravity.G);
-      for_each_index("octree walk", count, [=] __device__(std::size_t j) {
-        const GravityField f = octree_field(view, tx[j], te[j], std::uint32_t(j));
-        const std::uint32_t i = o[j];
-        s.a_grav[i] = f.a * G;
-        s.phi[i] = f.phi * G;
-        s.dvdt[i] += s.a_grav[i];
-      });
+      octree.field(s.x, s.m, e, count, gravity, kernel, s.a_grav, s.phi, s.dvdt);
     } else {
       (void)c;
       throw RunError("self-gravity needs a 3-D scene");
@@ -817,6 +846,30 @@ std::int64_t CudaStepper<D>::evaluations() const {
 template <int D>
 bool CudaStepper<D>::solid() const {
   return impl_->solid;
+}
+
+DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>* x, const Real* m, const Real* eps, std::size_t n,
+                                          const GravityConfig& gravity, KernelType kernel, Vec<3>* acc, Real* phi) {
+  int devices = 0;
+  if (cudaGetDeviceCount(&devices) != cudaSuccess || devices == 0) throw RunError("no CUDA device available");
+  DeviceArray<Vec<3>> dx, da;
+  DeviceArray<Real> dm, de, dp;
+  dx.resize(n);
+  da.resize(n);
+  dm.resize(n);
+  de.resize(n);
+  dp.resize(n);
+  std::vector<Real> e(n, Real(0));
+  if (eps) e.assign(eps, eps + n);
+  RUBBLE_CUDA(cudaMemcpy(dx.data(), x, n * sizeof(Vec<3>), cudaMemcpyHostToDevice));
+  RUBBLE_CUDA(cudaMemcpy(dm.data(), m, n * sizeof(Real), cudaMemcpyHostToDevice));
+  RUBBLE_CUDA(cudaMemcpy(de.data(), e.data(), n * sizeof(Real), cudaMemcpyHostToDevice));
+  DeviceOctree tree;
+  DeviceGravityTiming t;
+  tree.field(dx.data(), dm.data(), de.data(), n, gravity, kernel, da.data(), dp.data(), nullptr, &t);
+  RUBBLE_CUDA(cudaMemcpy(acc, da.data(), n * sizeof(Vec<3>), cudaMemcpyDeviceToHost));
+  if (phi) RUBBLE_CUDA(cudaMemcpy(phi, dp.data(), n * sizeof(Real), cudaMemcpyDeviceToHost));
+  return t;
 }
 
 template class CudaStepper<1>;
