@@ -7,6 +7,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
 #include "rubble/drivers/particle_rates.hpp"
+#include "rubble/drivers/rhs_features.hpp"
 #include "rubble/physics/kernels.hpp"
 #include "rubble/scene/materials.hpp"
 
@@ -51,19 +52,12 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
       gravity_(scene.gravity, scene.simulation.kernel) {
   if (gravity_.enabled() && (D != 3 || ps_.a_grav.size() != ps_.n || ps_.phi.size() != ps_.n))
     throw RunError("self-gravity needs a 3-D scene with the a_grav and phi fields allocated");
-  for (const MaterialParams& m : materials_) {
-    solid_ = solid_ || m.shear_modulus > Real(0);
-    artificial_stress_ = artificial_stress_ || m.as_exponent > Real(0);
-  }
-  if (solid_) {
-    if (summation_ || ps_.S.size() != ps_.n || ps_.dSdt.size() != ps_.n)
-      throw RunError("solids need continuity density with the S and dSdt fields allocated");
-    kernel_correction_ = scene.simulation.kernel_correction;
-    if (artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
-  }
+  const RhsFeatures f = rhs_features<D>(scene, materials_, ps_);
+  solid_ = f.solid;
+  artificial_stress_ = f.artificial_stress;
+  kernel_correction_ = f.kernel_correction;
+  if (solid_ && artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
   xsph_epsilon_ = Real(scene.simulation.xsph);
-  if (xsph_epsilon_ > Real(0) && ps_.xsph_v.size() != ps_.n)
-    throw RunError("XSPH needs the xsph_v field allocated");
 }
 
 template <int D>

@@ -18,17 +18,7 @@ inline void check(cudaError_t err, const char* call, const char* file, int line)
 
 }  // namespace rubble::cuda
 
-// Wrap a CUDA runtime call: RUBBLE_CUDA(cudaMalloc(&p, bytes));
+// Wrap a CUDA runtime call: RUBBLE_CUDA(cudaMalloc(&p, bytes)). Kernel
+// launches are checked by for_each_index (cuda_stepper.cu), and with
+// RUBBLE_CUDA_SYNC_CHECK defined also synchronised and checked after each.
 #define RUBBLE_CUDA(call) ::rubble::cuda::check((call), #call, __FILE__, __LINE__)
-
-// After a kernel launch: the launch error, and with RUBBLE_CUDA_SYNC_CHECK
-// defined (debug builds, compute-sanitizer runs) the kernel's own error too.
-#ifdef RUBBLE_CUDA_SYNC_CHECK
-#define RUBBLE_CUDA_LAUNCHED(name)                                              \
-  do {                                                                          \
-    ::rubble::cuda::check(cudaGetLastError(), "launch of " name, __FILE__, __LINE__); \
-    ::rubble::cuda::check(cudaDeviceSynchronize(), "kernel " name, __FILE__, __LINE__); \
-  } while (0)
-#else
-#define RUBBLE_CUDA_LAUNCHED(name) ::rubble::cuda::check(cudaGetLastError(), "launch of " name, __FILE__, __LINE__)
-#endif

@@ -47,6 +47,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/drivers/material_params.hpp"
 #include "rubble/drivers/particle_rates.hpp"
+#include "rubble/drivers/rhs_features.hpp"
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
 #include "rubble/gravity/octree_build.hpp"
@@ -310,18 +311,18 @@ class DeviceOctree {
 
     // 1. discovery, level by level
     const std::uint32_t leaf_size = std::uint32_t(gravity.leaf_size);
-    levels_.clear();
+    std::size_t L = 0;  // levels in use (their arrays are kept between calls)
     int cur = 0;
     frontier_[cur].resize(1);
     const OctreePending root{0, n32, 0, 0xFFFFFFFFu};
     RUBBLE_CUDA(cudaMemcpy(frontier_[cur].data(), &root, sizeof root, cudaMemcpyHostToDevice));
     std::size_t F = 1;
     while (F > 0) {
-      levels_.emplace_back();
-      levels_.back().resize(F);
+      if (L == levels_.size()) levels_.emplace_back();
+      levels_[L].resize(F);
       counts_.resize(F);
       offsets_.resize(F);
-      OctreeLevelNode* lv = levels_.back().data();
+      OctreeLevelNode* lv = levels_[L++].data();
       const OctreePending* fr = frontier_[cur].data();
       std::uint32_t* cnt = counts_.data();
       std::uint32_t* off = offsets_.data();
@@ -349,7 +350,6 @@ class DeviceOctree {
       cur = 1 - cur;
       F = total;
     }
-    const std::size_t L = levels_.size();
     // 2. subtree sizes, bottom up
     for (std::size_t l = L; l-- > 1;) {
       const OctreeLevelNode* lv = levels_[l].data();
@@ -442,7 +442,7 @@ struct CudaStepper<D>::Impl {
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
   DeviceOctree octree;  // Barnes-Hut (3-D)
-  std::int64_t fallbacks_total = 0, evaluations = 0, rebuilds = 0;
+  std::int64_t fallbacks_total = 0, evaluations = 0;
   bool host_current = true;
 
   Impl(const Scene& scene, ParticleStore<D>& ps, const Box<D>& dom)
@@ -462,16 +462,10 @@ struct CudaStepper<D>::Impl {
       throw RunError(std::string("--backend cuda: no CUDA device available (") +
                      (err != cudaSuccess ? cudaGetErrorString(err) : "device count 0") + ")");
     if (ps.n > std::numeric_limits<std::uint32_t>::max()) throw RunError("more than 2^32 - 1 particles");
-    for (const MaterialParams& m : materials_host) {
-      solid = solid || m.shear_modulus > Real(0);
-      artificial_stress = artificial_stress || m.as_exponent > Real(0);
-    }
-    if (solid) {
-      if (summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
-        throw RunError("solids need continuity density with the S and dSdt fields allocated");
-      kernel_correction = scene.simulation.kernel_correction;
-    }
-    if (xsph_epsilon > Real(0) && ps.xsph_v.size() != ps.n) throw RunError("XSPH needs the xsph_v field allocated");
+    const RhsFeatures f = rhs_features<D>(scene, materials_host, ps);
+    solid = f.solid;
+    artificial_stress = f.artificial_stress;
+    kernel_correction = f.kernel_correction;
     materials.resize(materials_host.size());
     RUBBLE_CUDA(cudaMemcpy(materials.data(), materials_host.data(), materials_host.size() * sizeof(MaterialParams),
                            cudaMemcpyHostToDevice));
@@ -584,7 +578,6 @@ struct CudaStepper<D>::Impl {
       if (i + 1 == count || cell[i + 1] != c) en[c] = std::uint32_t(i + 1);
     });
     grid = g;
-    ++rebuilds;
   }
 
   void summation_density_and_h() {

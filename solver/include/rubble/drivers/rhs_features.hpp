@@ -1,0 +1,37 @@
+#pragma once
+// Which feature set the right-hand side runs (DESIGN.md principle 2),
+// decided once from the scene's materials and checked against the fields
+// the store allocated; both drivers (hydro_cpu.cpp, cuda_stepper.cu) ask here.
+#include <vector>
+
+#include "rubble/core/error.hpp"
+#include "rubble/drivers/material_params.hpp"
+#include "rubble/particles/particle_store.hpp"
+#include "rubble/scene/scene.hpp"
+
+namespace rubble {
+
+struct RhsFeatures {
+  bool solid = false;              // a material has a shear modulus: feature set Solid
+  bool artificial_stress = false;  // a solid material has artificial stress
+  bool kernel_correction = false;  // solids: corrected velocity gradient
+};
+
+// Throws RunError when the store lacks a field the features need.
+template <int D>
+RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& materials, const ParticleStore<D>& ps) {
+  RhsFeatures f;
+  for (const MaterialParams& m : materials) {
+    f.solid = f.solid || m.shear_modulus > Real(0);
+    f.artificial_stress = f.artificial_stress || m.as_exponent > Real(0);
+  }
+  if (f.solid) {
+    if (scene.simulation.density == DensityForm::Summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
+      throw RunError("solids need continuity density with the S and dSdt fields allocated");
+    f.kernel_correction = scene.simulation.kernel_correction;
+  }
+  if (scene.simulation.xsph > 0 && ps.xsph_v.size() != ps.n) throw RunError("XSPH needs the xsph_v field allocated");
+  return f;
+}
+
+}  // namespace rubble
