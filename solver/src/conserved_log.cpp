@@ -62,10 +62,11 @@ void ConservedLog::append(const ConservedRecord& r) {
 }
 
 template <int D>
-ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt) {
+ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt,
+                                  const Vec<D>& g) {
   const StoreView<D> s = const_cast<ParticleStore<D>&>(ps).view();  // read only
   ConservedSums sum;
-  for (std::size_t i = 0; i < ps.n; ++i) sum = sum + conserved_particle<D>(s, i);
+  for (std::size_t i = 0; i < ps.n; ++i) sum = sum + conserved_particle<D>(s, i, g);
   return conserved_record(sum, time, step, dt);
 }
 
@@ -86,8 +87,8 @@ ConservedRecord conserved_record(const ConservedSums& sum, double time, std::int
   return r;
 }
 
-template ConservedRecord measure_conserved<1>(const ParticleStore<1>&, double, std::int64_t, double);
-template ConservedRecord measure_conserved<2>(const ParticleStore<2>&, double, std::int64_t, double);
-template ConservedRecord measure_conserved<3>(const ParticleStore<3>&, double, std::int64_t, double);
+template ConservedRecord measure_conserved<1>(const ParticleStore<1>&, double, std::int64_t, double, const Vec<1>&);
+template ConservedRecord measure_conserved<2>(const ParticleStore<2>&, double, std::int64_t, double, const Vec<2>&);
+template ConservedRecord measure_conserved<3>(const ParticleStore<3>&, double, std::int64_t, double, const Vec<3>&);
 
 }  // namespace rubble

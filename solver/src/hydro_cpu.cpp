@@ -13,6 +13,34 @@
 
 namespace rubble {
 
+PorosityParams porosity_params_from_config(const PorosityConfig& c) {
+  PorosityParams p{};
+  p.enabled = c.enabled;
+  if (!c.enabled) return p;
+  p.curve = c.crush_curve == CrushCurveType::Steep ? CrushCurve::Steep : CrushCurve::Quadratic;
+  p.alpha_e = Real(c.alpha0);
+  p.p_e = Real(c.p_e);
+  p.p_s = Real(c.p_s);
+  p.p_t = Real(c.p_t);
+  p.alpha_t = Real(c.alpha_t);
+  p.n1 = Real(c.n1);
+  p.n2 = Real(c.n2);
+  p.c_e = Real(c.c_e);
+  p.c_s0 = Real(c.c_s0);
+  return p;
+}
+
+PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
+  switch (c.model) {
+    case PlasticityType::VonMises: return von_mises_params(Real(c.yield_stress));
+    case PlasticityType::DruckerPrager:
+      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle),
+                                   c.cone == ConeFit::Compression ? DpConeFit::Compression : DpConeFit::PlaneStrain);
+    case PlasticityType::None:
+    default: return PlasticityParams{};
+  }
+}
+
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
   std::vector<MaterialParams> out;
   for (const auto& m : scene.materials) {
@@ -24,6 +52,8 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     const bool as = m.artificial_stress.enabled && m.shear_modulus > 0;
     p.as_epsilon = as ? Real(m.artificial_stress.epsilon) : Real(0);
     p.as_exponent = as ? Real(m.artificial_stress.n) : Real(0);
+    p.porosity = porosity_params_from_config(m.porosity);
+    p.plasticity = plasticity_params_from_config(m.plasticity);
     // dp: the lattice spacing of the first body of this material (the
     // artificial stress's W(dp); Gray, Monaghan & Swift 2001)
     p.dp = 0;
@@ -57,6 +87,10 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   artificial_stress_ = f.artificial_stress;
   kernel_correction_ = f.kernel_correction;
   if (solid_ && artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
+  porosity_ = f.porosity;
+  plasticity_ = f.plasticity;
+  body_force_ = f.body_force;
+  for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
   xsph_epsilon_ = Real(scene.simulation.xsph);
 }
 
@@ -103,6 +137,8 @@ RhsContext<D> HydroCpu<D>::context() {
   c.xsph_epsilon = xsph_epsilon_;
   c.courant = courant_;
   c.force_factor = force_factor_;
+  c.body_force = g_;
+  c.has_body_force = body_force_;
   return c;
 }
 
@@ -200,6 +236,44 @@ void HydroCpu<D>::xsph_velocity() {
 }
 
 template <int D>
+void HydroCpu<D>::porosity_rates() {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) porosity_rate_particle<D>(c, static_cast<std::uint32_t>(a));
+}
+
+template <int D>
+void HydroCpu<D>::plastic_return(bool accumulate) {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) plastic_return_particle<D>(c, static_cast<std::uint32_t>(a), accumulate);
+}
+
+template <int D>
+void HydroCpu<D>::body_force() {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) body_force_particle<D>(c, static_cast<std::uint32_t>(a));
+}
+
+template <int D>
+void HydroCpu<D>::end_step() {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+  if (porosity_) {
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
+  }
+  if (!plasticity_) return;
+  // the pressure of the final state first: the return works at fixed p
+  equation_of_state();
+  plastic_return(true);
+}
+
+template <int D>
 void HydroCpu<D>::hold_boundaries() {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
@@ -225,10 +299,13 @@ void HydroCpu<D>::evaluate() {
   if (summation_) summation_density_and_h();
   else h_from_continuity_density();
   equation_of_state();
+  if (plasticity_) plastic_return(false);
   if (solid_) solid_rates();  // the feature set is fixed for the run
   else rates();
   if (gravity_.enabled()) self_gravity();
+  if (body_force_) body_force();
   if (!ps_.boundary.empty()) hold_boundaries();
+  if (porosity_) porosity_rates();  // needs the held boundaries' zero rates
   if (xsph_epsilon_ > Real(0)) xsph_velocity();
 }
 

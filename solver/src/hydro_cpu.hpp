@@ -28,6 +28,10 @@ class HydroCpu {
   // Density (and h), pressure, sound speed, and all time derivatives at the
   // current state of the store.
   void evaluate();
+  // After the integrator's last update of a step: porous states back onto
+  // the loading envelope, and the plastic return mapping (with plastic-strain
+  // accumulation) at the step's final state. Nothing when neither is used.
+  void end_step();
   // Largest stable time step at the last evaluated state (Courant and force limits).
   Real dt_limit();
 
@@ -55,6 +59,9 @@ class HydroCpu {
   void hold_boundaries();
   void self_gravity();
   void xsph_velocity();  // XSPH correction to dx/dt (when simulation.xsph > 0)
+  void porosity_rates();  // d alpha/dt of porous materials (after the rates)
+  void plastic_return(bool accumulate);  // yield: S back onto the surface
+  void body_force();      // simulation.gravity
 
   ParticleStore<D>& ps_;
   Box<D> domain_;
@@ -74,6 +81,8 @@ class HydroCpu {
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
+  bool porosity_ = false, plasticity_ = false, body_force_ = false;
+  Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;
 };
 

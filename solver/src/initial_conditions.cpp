@@ -162,7 +162,12 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
     }
     const double m = b.density * lattice_cell_volume<D>(b.lattice, b.spacing);
     const EosParams& eos = materials[b.material_id].eos;
-    const double u = b.pressure >= 0 ? eos_internal_energy_from_pressure(eos, Real(b.density), Real(b.pressure))
+    // A porous body's density is the bulk density rho; its matrix is at
+    // rho_s = alpha0 rho with p_s = alpha0 p (p = p_s(alpha rho, u)/alpha).
+    const PorosityParams& por = materials[b.material_id].porosity;
+    const double alpha0 = por.enabled ? double(por.alpha_e) : 1.0;
+    const double u = b.pressure >= 0 ? eos_internal_energy_from_pressure(eos, Real(alpha0 * b.density),
+                                                                         Real(alpha0 * b.pressure))
                                      : b.internal_energy;
     if (!std::isfinite(u) || u < 0)
       throw InputError(scene.file, key, "initial internal energy is not finite and non-negative");
@@ -174,6 +179,9 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
       ps.rho[next] = Real(b.density);
       ps.u[next] = Real(u);
       ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));
+      if (!ps.alpha.empty()) ps.alpha[next] = Real(alpha0);
+      if (!ps.wall_normal.empty() && b.wall_free_slip)
+        for (int k = 0; k < D; ++k) ps.wall_normal[next][k] = Real(b.wall_normal[k]);
       if (!ps.boundary.empty())
         ps.boundary[next] = b.boundary == BoundaryKind::None ? 0 : b.boundary_evolving ? 2 : 1;
       for (int k = 0; k < D; ++k)

@@ -101,6 +101,7 @@ template <int D>
 class CpuStepper {
  public:
   CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain) : ps_(ps), sys_(scene, ps, domain) {
+    for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
     sys_.sort_particles();
     sys_.evaluate();
   }
@@ -122,7 +123,9 @@ class CpuStepper {
       if (!finite_particle<D>(s, i)) return i;
     return ps_.n;
   }
-  ConservedRecord conserved(double t, std::int64_t step, double dt) { return measure_conserved<D>(ps_, t, step, dt); }
+  ConservedRecord conserved(double t, std::int64_t step, double dt) {
+    return measure_conserved<D>(ps_, t, step, dt, g_);
+  }
   const ParticleStore<D>& host() { return ps_; }  // the state, on the host
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
   std::int64_t evaluations() const { return sys_.evaluations(); }
@@ -132,6 +135,7 @@ class CpuStepper {
  private:
   ParticleStore<D>& ps_;
   HydroCpu<D> sys_;
+  Vec<D> g_ = Vec<D>::zero();  // simulation.gravity (its potential energy)
 };
 
 template <int D, class Stepper>
@@ -213,6 +217,10 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
   fs.u.assign(ps.u.begin(), ps.u.end());
   fs.h.assign(ps.h.begin(), ps.h.end());
   fs.cs.assign(ps.cs.begin(), ps.cs.end());
+  fs.alpha.assign(ps.alpha.begin(), ps.alpha.end());
+  fs.eps_p.assign(ps.eps_p.begin(), ps.eps_p.end());
+  fs.material_id.assign(ps.material_id.begin(), ps.material_id.end());
+  if (!ps.boundary.empty()) fs.boundary.assign(ps.boundary.begin(), ps.boundary.end());
   fs.correction_fallbacks = sys.correction_fallbacks();
   fs.particle_evaluations = sys.evaluations() * std::int64_t(ps.n);
   if (sim.kernel_correction && sys.solid() && !opt.quiet)
@@ -236,8 +244,15 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   needs.continuity_density = sim.density == DensityForm::Continuity;
   needs.gravity = scene.gravity.mode != GravityMode::Off;
   for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
-  for (const BodyConfig& b : scene.bodies) needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
+  for (const BodyConfig& b : scene.bodies) {
+    needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
+    needs.free_slip = needs.free_slip || b.wall_free_slip;
+  }
   needs.xsph = sim.xsph > 0;
+  for (const MaterialConfig& m : scene.materials) {
+    needs.porosity = needs.porosity || m.porosity.enabled;
+    needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;
+  }
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);
 

@@ -347,6 +347,8 @@ class SceneReader {
   void read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c);
   void read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c);
   void read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o);
+  void read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m);
+  void read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   std::string resolve_library(const std::string& spec, const std::string& key, const toml::node* where) const;
   void record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file);
   BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
@@ -366,7 +368,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
               "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
-              "kernel_correction", "xsph"});
+              "kernel_correction", "xsph", "gravity"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -432,6 +434,8 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
     require(*x >= 0 && *x <= 1, *t, "xsph", p, *x, "in [0, 1] (0 = off; Monaghan 1989 uses 0.5)");
     s.xsph = *x;
   }
+  // A uniform external acceleration (issue #12): D numbers, m/s^2.
+  if (auto g = vector(*t, "gravity", p)) s.gravity = *g;
 }
 
 // ---- materials (docs/scene.md "Materials"; issue #3) -------------------------
@@ -600,7 +604,8 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   // (rho_limit is known to every EOS so that the ideal gas can say why it
   // has no tension cut-off)
   std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
-                                    "p_min",  "cs_min",        "shear_modulus",    "artificial_stress"};
+                                    "p_min",  "cs_min",        "shear_modulus",    "artificial_stress",
+                                    "porosity", "plasticity"};
   if (m.eos == EosType::IdealGas) known.push_back("gamma");
   if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
   if (m.eos == EosType::Tillotson) known.push_back("tillotson");
@@ -670,7 +675,83 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
     if (m.artificial_stress.enabled && !(m.shear_modulus > 0))
       fail(ap, "artificial stress acts on solids only; give the material a shear_modulus > 0 or remove it");
   }
+  if (const toml::table* q = table(t, "porosity", p)) read_porosity(*q, sub(p, "porosity"), m);
+  if (const toml::table* q = table(t, "plasticity", p)) read_plasticity(*q, sub(p, "plasticity"), m);
   return m;
+}
+
+// porosity = { model = "p_alpha", alpha0, p_e, p_s, crush_curve, [p_t, alpha_t, n1, n2], c_e, c_s0 }
+// (issue #11; Jutzi, Benz & Michel 2008; Jutzi et al. 2009; docs/scene.md).
+void SceneReader::read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m) {
+  PorosityConfig& c = m.porosity;
+  const auto model = string(q, "model", qp);
+  if (!model) fail(sub(qp, "model"), "missing required key (the porosity model; \"p_alpha\")");
+  choice(q, "model", qp, 0, {{"p_alpha", 0}});
+  c.crush_curve = choice(q, "crush_curve", qp, CrushCurveType::Quadratic,
+                         {{"quadratic", CrushCurveType::Quadratic}, {"steep", CrushCurveType::Steep}});
+  std::vector<std::string> known = {"model", "crush_curve", "alpha0", "p_e", "p_s", "c_e", "c_s0"};
+  if (c.crush_curve == CrushCurveType::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
+  check_keys(q, qp, known);
+  if (m.eos == EosType::IdealGas)
+    fail(qp, "a porous material needs a Murnaghan or Tillotson matrix; an ideal gas has no solid matrix to compact",
+         q.get("model"));
+  c.enabled = true;
+  c.alpha0 = required_number(q, "alpha0", qp, "the initial distention alpha0 = rho_s/rho > 1");
+  require(c.alpha0 > 1, q, "alpha0", qp, c.alpha0, "> 1 (alpha = rho_matrix/rho_bulk; 1 is no porosity)");
+  c.p_e = required_number(q, "p_e", qp, "the elastic limit [Pa]");
+  require(c.p_e >= 0, q, "p_e", qp, c.p_e, ">= 0");
+  c.p_s = required_number(q, "p_s", qp, "the full-compaction pressure [Pa]");
+  require(c.p_s > c.p_e, q, "p_s", qp, c.p_s, "> p_e = " + fmt(c.p_e) + " (the crush curve runs from p_e to p_s)");
+  c.c_s0 = required_number(q, "c_s0", qp, "the matrix sound speed [m/s]");
+  require(c.c_s0 > 0, q, "c_s0", qp, c.c_s0, "> 0");
+  c.c_e = required_number(q, "c_e", qp, "the porous elastic sound speed [m/s]");
+  require(c.c_e > 0 && c.c_e < c.c_s0, q, "c_e", qp, c.c_e,
+          "> 0 and < c_s0 = " + fmt(c.c_s0) + " (porous material is elastically softer than its matrix)");
+  if (c.crush_curve == CrushCurveType::Steep) {
+    c.p_t = required_number(q, "p_t", qp, "the steep curve's transition pressure [Pa]");
+    require(c.p_t > c.p_e && c.p_t < c.p_s, q, "p_t", qp, c.p_t, "between p_e and p_s");
+    c.alpha_t = required_number(q, "alpha_t", qp, "the steep curve's distention at p_t");
+    require(c.alpha_t > 1 && c.alpha_t < c.alpha0, q, "alpha_t", qp, c.alpha_t, "> 1 and < alpha0");
+    c.n1 = required_number(q, "n1", qp, "the steep curve's first exponent");
+    require(c.n1 > 0, q, "n1", qp, c.n1, "> 0");
+    c.n2 = required_number(q, "n2", qp, "the steep curve's second exponent");
+    require(c.n2 > 0, q, "n2", qp, c.n2, "> 0");
+  } else {
+    c.n2 = 2;  // Jutzi 2008 eq. 8
+  }
+}
+
+// plasticity = { model = "von_mises", yield_stress } or
+// { model = "drucker_prager", friction_angle, cohesion, dilatancy_angle, cone } (issue #12; docs/scene.md).
+void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m) {
+  PlasticityConfig& c = m.plasticity;
+  const auto model = string(q, "model", qp);
+  if (!model) fail(sub(qp, "model"), "missing required key (\"von_mises\" or \"drucker_prager\")");
+  c.model = choice(q, "model", qp, PlasticityType::None,
+                   {{"von_mises", PlasticityType::VonMises}, {"drucker_prager", PlasticityType::DruckerPrager}});
+  if (c.model == PlasticityType::VonMises) {
+    check_keys(q, qp, {"model", "yield_stress"});
+    c.yield_stress = required_number(q, "yield_stress", qp, "the von Mises yield stress Y [Pa]");
+    require(c.yield_stress > 0, q, "yield_stress", qp, c.yield_stress, "> 0");
+  } else {
+    check_keys(q, qp, {"model", "friction_angle", "cohesion", "dilatancy_angle", "cone"});
+    c.friction_angle = required_number(q, "friction_angle", qp, "the friction angle phi [degrees]");
+    require(c.friction_angle >= 0 && c.friction_angle < 90, q, "friction_angle", qp, c.friction_angle,
+            "in [0, 90) degrees");
+    c.cohesion = required_number(q, "cohesion", qp, "the cohesion c [Pa] (0 for dry sand)");
+    require(c.cohesion >= 0, q, "cohesion", qp, c.cohesion, ">= 0");
+    if (c.friction_angle == 0 && c.cohesion == 0)
+      fail(sub(qp, "cohesion"), "is 0 with friction_angle = 0: the material would have no strength at all");
+    if (auto x = number(q, "dilatancy_angle", qp)) {
+      require(*x >= 0 && *x <= c.friction_angle, q, "dilatancy_angle", qp, *x,
+              "in [0, friction_angle = " + fmt(c.friction_angle) + "] degrees (psi > phi is unphysical)");
+      c.dilatancy_angle = *x;
+    }
+    c.cone = choice(q, "cone", qp, ConeFit::PlaneStrain,
+                    {{"plane_strain", ConeFit::PlaneStrain}, {"compression", ConeFit::Compression}});
+  }
+  if (!(m.shear_modulus > 0))
+    fail(qp, "plasticity acts on solids only; give the material a shear_modulus > 0 (a fluid has no deviatoric stress)");
 }
 
 MaterialConfig SceneReader::read_library_material(const std::string& name, const toml::table& t) {
@@ -728,7 +809,9 @@ MaterialConfig SceneReader::read_material(const std::string& name, const toml::t
 void SceneReader::check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m,
                                            double rho, double pressure) const {
   const EosParams e = eos_params_from_material(m);
-  if (eos_internal_energy_from_pressure(e, Real(rho), Real(pressure)) >= 0) return;
+  // porous: the matrix carries p_s = alpha0 p at rho_s = alpha0 rho
+  const double a0 = m.porosity.enabled ? m.porosity.alpha0 : 1.0;
+  if (eos_internal_energy_from_pressure(e, Real(a0 * rho), Real(a0 * pressure)) >= 0) return;
   const std::string key = sub(p, "pressure");
   if (m.eos == EosType::Murnaghan) {
     const MurnaghanConfig& c = m.murnaghan;
@@ -759,7 +842,7 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
-                                    "velocity", "boundary", "boundary_state"};
+                                    "velocity", "boundary", "boundary_state", "wall_slip", "wall_normal"};
   if (round) known.insert(known.end(), {"center", "radius"});
   else known.insert(known.end(), {"min", "max"});
   if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
@@ -856,6 +939,27 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
       fail(p + ".boundary_state", "only a boundary body (boundary = \"fixed\" or \"moving\") has a boundary_state",
            t.get("boundary_state"));
     b.boundary_evolving = choice(t, "boundary_state", p, false, {{"frozen", false}, {"evolving", true}});
+  }
+  // Walls (issue #12): no-slip (the default: the wall's velocity enters the
+  // velocity gradient and the viscosity like any neighbour's) or free-slip
+  // (only the relative velocity along the wall normal counts).
+  if (t.contains("wall_slip") || t.contains("wall_normal")) {
+    if (b.boundary == BoundaryKind::None)
+      fail(p + (t.contains("wall_slip") ? ".wall_slip" : ".wall_normal"),
+           "only a boundary body (boundary = \"fixed\" or \"moving\") is a wall",
+           t.get(t.contains("wall_slip") ? "wall_slip" : "wall_normal"));
+    b.wall_free_slip = choice(t, "wall_slip", p, false, {{"no_slip", false}, {"free_slip", true}});
+    if (b.wall_free_slip) {
+      const auto n = vector(t, "wall_normal", p);
+      if (!n) fail(p + ".wall_normal", "missing: a free_slip wall needs its unit normal (pointing into the material it holds)");
+      double len = 0;
+      for (int a = 0; a < dim_; ++a) len += (*n)[a] * (*n)[a];
+      if (!(len > 0)) fail(p + ".wall_normal", "is the zero vector; give the wall's normal, e.g. [0, 1] for a floor",
+                           t.get("wall_normal"));
+      for (int a = 0; a < dim_; ++a) b.wall_normal[a] = (*n)[a] / std::sqrt(len);
+    } else if (t.contains("wall_normal")) {
+      fail(p + ".wall_normal", "only a free_slip wall uses a normal (wall_slip = \"free_slip\")", t.get("wall_normal"));
+    }
   }
   return b;
 }
@@ -1059,10 +1163,14 @@ Scene SceneReader::read(const toml::table& root) {
   const toml::table* sim_table = table(root, "simulation", "");
   const bool density_given = sim_table && sim_table->contains("density");
   for (const MaterialConfig& m : scene.materials) {
-    if (!(m.shear_modulus > 0) || scene.simulation.density == DensityForm::Continuity) continue;
+    const bool needs_continuity = m.shear_modulus > 0 || m.porosity.enabled;
+    if (!needs_continuity || scene.simulation.density == DensityForm::Continuity) continue;
     if (density_given)
       fail("simulation.density",
-           "material '" + m.name + "' is a solid (shear_modulus > 0), which needs density = \"continuity\"",
+           "material '" + m.name + "' is " +
+               (m.porosity.enabled ? std::string("porous (its distention evolves with d rho/dt)")
+                                   : std::string("a solid (shear_modulus > 0)")) +
+               ", which needs density = \"continuity\"",
            sim_table->get("density"));
     scene.simulation.density = DensityForm::Continuity;
   }

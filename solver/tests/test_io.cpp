@@ -74,6 +74,8 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.gravity = true;  // a_grav (a snapshot field) and phi
   needs.solid = true;     // S (a snapshot field) and dSdt
   needs.boundary = true;  // boundary flags
+  needs.porosity = true;    // alpha (a snapshot field) and dalphadt
+  needs.plasticity = true;  // eps_p (a snapshot field)
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -246,6 +248,8 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.a_grav.clear();  // no self-gravity
   ps.S.clear();       // no solids
   ps.boundary.clear();  // no boundary bodies
+  ps.alpha.clear();     // no porosity
+  ps.eps_p.clear();     // no plasticity
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;

@@ -428,6 +428,8 @@ struct CudaStepper<D>::Impl {
   KernelType kernel;
   Real hfact, courant, force_factor, xsph_epsilon;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
+  bool porosity = false, plasticity = false, body_force = false;
+  Vec<D> g = Vec<D>::zero();  // simulation.gravity
   GravityConfig gravity;
   DeviceArray<Mat<D>> art_R;
   DeviceArray<Real> search_radius, eps;
@@ -438,7 +440,7 @@ struct CudaStepper<D>::Impl {
   GridNeighbors<D> grid{};
   // integrator scratch
   DeviceArray<Vec<D>> v_half;
-  DeviceArray<Real> u_half, rho_half;
+  DeviceArray<Real> u_half, rho_half, alpha_half;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
   DeviceOctree octree;  // Barnes-Hut (3-D)
@@ -466,6 +468,10 @@ struct CudaStepper<D>::Impl {
     solid = f.solid;
     artificial_stress = f.artificial_stress;
     kernel_correction = f.kernel_correction;
+    porosity = f.porosity;
+    plasticity = f.plasticity;
+    body_force = f.body_force;
+    for (int k = 0; k < D; ++k) g[k] = Real(scene.simulation.gravity[k]);
     materials.resize(materials_host.size());
     RUBBLE_CUDA(cudaMemcpy(materials.data(), materials_host.data(), materials_host.size() * sizeof(MaterialParams),
                            cudaMemcpyHostToDevice));
@@ -496,6 +502,8 @@ struct CudaStepper<D>::Impl {
     c.xsph_epsilon = xsph_epsilon;
     c.courant = courant;
     c.force_factor = force_factor;
+    c.body_force = g;
+    c.has_body_force = body_force;
     return c;
   }
 
@@ -623,6 +631,9 @@ struct CudaStepper<D>::Impl {
     const RhsContext<D> c = context();
     const GridNeighbors<D> g = grid;
     for_each_index("equation of state", count, [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
+    if (plasticity)
+      for_each_index("plastic return", count,
+                     [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), false); });
     if (solid) {
       int* flag = flags.data();
       for_each_index("solid velocity gradient", count, [=] __device__(std::size_t i) {
@@ -647,9 +658,14 @@ struct CudaStepper<D>::Impl {
     }
     if (gravity.mode == GravityMode::Direct) self_gravity(c);
     else if (gravity.mode == GravityMode::BarnesHut) barnes_hut(c);
+    if (body_force)
+      for_each_index("body force", count, [=] __device__(std::size_t i) { body_force_particle<D>(c, std::uint32_t(i)); });
     if (c.s.boundary)
       for_each_index("hold boundaries", count,
                      [=] __device__(std::size_t i) { hold_boundary_particle<D>(c, std::uint32_t(i)); });
+    if (porosity)
+      for_each_index("porosity rates", count,
+                     [=] __device__(std::size_t i) { porosity_rate_particle<D>(c, std::uint32_t(i)); });
     if (xsph_epsilon > Real(0))
       for_each_index("xsph", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
@@ -698,6 +714,19 @@ struct CudaStepper<D>::Impl {
     }
   }
 
+  // After the integrator's last update of a step (hydro_cpu.hpp: end_step).
+  void end_step() {
+    const RhsContext<D> c = context();
+    if (porosity)
+      for_each_index("end-of-step porosity", n(),
+                     [=] __device__(std::size_t i) { porosity_end_step_particle<D>(c, std::uint32_t(i)); });
+    if (!plasticity) return;
+    for_each_index("end-of-step equation of state", n(),
+                   [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
+    for_each_index("end-of-step plastic return", n(),
+                   [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), true); });
+  }
+
   double dt_limit() {
     const RhsContext<D> c = context();
     return double(reduce_index<Real>(
@@ -712,13 +741,15 @@ struct CudaStepper<D>::Impl {
     u_half.resize(count);
     if (s.drhodt) rho_half.resize(count);
     if (s.dSdt) S_half.resize(count);
+    if (s.dalphadt) alpha_half.resize(count);
     const LeapfrogHalf<D> half{v_half.data(), u_half.data(), s.drhodt ? rho_half.data() : nullptr,
-                               s.dSdt ? S_half.data() : nullptr};
+                               s.dSdt ? S_half.data() : nullptr, s.dalphadt ? alpha_half.data() : nullptr};
     const Box<D> dom = domain;
     for_each_index("leapfrog kick-drift", count,
                    [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
     evaluate();
     for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
+    end_step();
   }
 
   Rk2Result rk2(Real dt, Real tol, Real dt_min) {
@@ -751,6 +782,7 @@ struct CudaStepper<D>::Impl {
         for_each_index("rk2 final", count, [=] __device__(std::size_t i) {
           rk2_combine<D>(y, v0, v0, &v1, h2, dom, i);
         });
+        end_step();
         evaluate();  // k1 of the next step
         return {dt, dt * factor, rejections};
       }
@@ -811,8 +843,9 @@ std::size_t CudaStepper<D>::first_non_finite() {
 template <int D>
 ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt) {
   const StoreView<D> s = impl_->store.view();
+  const Vec<D> g = impl_->g;
   const ConservedSums sum = reduce_index<ConservedSums>(
-      impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i); }, ConservedSums{},
+      impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); }, ConservedSums{},
       thrust::plus<ConservedSums>());
   return conserved_record(sum, t, step, dt);
 }

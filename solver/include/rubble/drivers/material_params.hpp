@@ -6,6 +6,8 @@
 #include "rubble/core/real.hpp"
 #include "rubble/physics/artificial_viscosity.hpp"
 #include "rubble/physics/eos/eos.hpp"
+#include "rubble/physics/plasticity.hpp"
+#include "rubble/physics/porosity.hpp"
 
 namespace rubble {
 
@@ -19,7 +21,16 @@ struct MaterialParams {
   Real as_epsilon;     // artificial stress epsilon (0 = off)
   Real as_exponent;    // artificial stress n (0 = off)
   Real dp;             // initial particle spacing of the material's bodies
+  PorosityParams porosity;      // p-alpha (porosity.enabled = false: not porous)
+  PlasticityParams plasticity;  // model None: elastic (or fluid)
 };
+
+// The device-ready porosity and plasticity parameters of a validated
+// material (hydro_cpu.cpp).
+struct PorosityConfig;
+struct PlasticityConfig;
+PorosityParams porosity_params_from_config(const PorosityConfig& c);
+PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
 
 // One entry per scene material, in material_id order (hydro_cpu.cpp).
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene);

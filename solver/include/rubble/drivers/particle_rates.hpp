@@ -18,6 +18,8 @@
 #include "rubble/physics/jaumann_rate.hpp"
 #include "rubble/physics/kernel_gradient_correction.hpp"
 #include "rubble/physics/kernels.hpp"
+#include "rubble/physics/plasticity.hpp"
+#include "rubble/physics/porosity.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/solid.hpp"
 #include "rubble/physics/timestep.hpp"
@@ -38,11 +40,32 @@ struct RhsContext {
   Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
   Real xsph_epsilon = 0;
   Real courant = 0, force_factor = 0;
+  Vec<D> body_force = Vec<D>::zero();  // uniform external acceleration (simulation.gravity)
+  bool has_body_force = false;
 };
+
+// Largest fractional change of the distention alpha in one step (PHYSICS.md
+// §1 "rate limits on the evolved quantities"; §4 "~1e-2"): dt <= this *
+// alpha / |d alpha/dt| (dt_limit_particle).
+constexpr Real kAlphaStepFraction = Real(1e-2);
 
 // Condition limit of the kernel-gradient correction matrix
 // (kernel_gradient_correction.hpp): below it the identity is used.
 constexpr Real kCorrectionMinDet = Real(1e-3);
+
+// ---- walls ---------------------------------------------------------------
+
+// The velocity particle a sees for neighbour b. A free-slip wall particle
+// (a boundary particle with a wall normal n) takes a's own tangential
+// velocity, v_b' = v_a - ((v_a - v_b).n) n, so that only the approach
+// along the normal acts (no wall friction in the velocity gradient, the
+// viscosity or XSPH); any other neighbour is seen as it moves.
+template <int D>
+RUBBLE_HD_INLINE Vec<D> seen_velocity(const StoreView<D>& s, std::uint32_t a, std::uint32_t b) {
+  if (!s.wall_normal || !s.boundary[b]) return s.v[b];
+  const Vec<D> n = s.wall_normal[b];
+  return s.v[a] - dot(s.v[a] - s.v[b], n) * n;
+}
 
 // ---- density -------------------------------------------------------------
 
@@ -97,12 +120,87 @@ RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint3
   c.s.h[a] = h_from_density<D>(c.hfact, c.s.m[a], c.s.rho[a]);
 }
 
-// Pressure and sound speed from the material's equation of state.
+// Pressure and sound speed from the material's equation of state; for a
+// porous material p = p_s(alpha rho, u)/alpha (physics/porosity.hpp).
 template <int D>
 RUBBLE_HD_INLINE void eos_particle(const RhsContext<D>& c, std::uint32_t a) {
-  const EosState e = eos_evaluate(c.mat[c.s.material_id[a]].eos, c.s.rho[a], c.s.u[a]);
-  c.s.p[a] = e.p;
-  c.s.cs[a] = std::sqrt(e.c2 > Real(0) ? e.c2 : Real(0));
+  const MaterialParams& mat = c.mat[c.s.material_id[a]];
+  Real p, c2;
+  if (mat.porosity.enabled) {
+    const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, c.s.rho[a], c.s.u[a], c.s.alpha[a]);
+    p = e.p;
+    c2 = e.c2;
+  } else {
+    const EosState e = eos_evaluate(mat.eos, c.s.rho[a], c.s.u[a]);
+    p = e.p;
+    c2 = e.c2;
+  }
+  c.s.p[a] = p;
+  c.s.cs[a] = std::sqrt(c2 > Real(0) ? c2 : Real(0));
+}
+
+// ---- porosity and plasticity (per particle, no neighbours) ----------------
+
+// The factor between the evolved deviatoric stress S and the one that acts
+// in the momentum equation (porous solids: porosity.hpp's
+// porous_deviatoric_factor; 1 otherwise).
+template <int D>
+RUBBLE_HD_INLINE Real deviatoric_factor_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const MaterialParams& mat = c.mat[c.s.material_id[a]];
+  return mat.porosity.enabled ? porous_deviatoric_factor(mat.porosity, c.s.alpha[a]) : Real(1);
+}
+
+// d alpha/dt of particle a from the chain rule, once d rho/dt and du/dt are
+// known (porosity.hpp: porosity_dalpha_dt); 0 for non-porous materials and
+// frozen boundary particles.
+template <int D>
+RUBBLE_HD_INLINE void porosity_rate_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  const bool frozen = s.boundary && s.boundary[a] == 1;
+  s.dalphadt[a] = (mat.porosity.enabled && !frozen)
+                      ? porosity_dalpha_dt(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a], s.drhodt[a], s.dudt[a])
+                      : Real(0);
+}
+
+// The plastic return mapping of particle a's deviatoric stress onto its
+// material's yield surface (plasticity.hpp: plastic_return), at the
+// pressure of the last eos_particle. With `accumulate` (once per accepted
+// step, at its end) the equivalent plastic strain grows by the return's
+// increment; the returns inside an evaluation (stage states the integrator
+// discards) only keep the stress on the surface. Tension beyond the
+// Drucker-Prager apex is capped at the apex pressure for this evaluation
+// (the EOS has no memory of it: the next evaluation starts again from p(rho, u)).
+template <int D>
+RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint32_t a, bool accumulate) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  if (mat.plasticity.model == PlasticityModel::None || (s.boundary && s.boundary[a] == 1)) return;
+  const Real f = deviatoric_factor_particle<D>(c, a);
+  const Real K = s.rho[a] * s.cs[a] * s.cs[a];
+  const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], s.p[a], f * mat.shear_modulus, K);
+  s.S[a] = (Real(1) / f) * r.S;
+  s.p[a] = r.p;
+  if (accumulate) s.eps_p[a] += r.deps_p;
+}
+
+// End of an accepted step: a porous state that overshot the loading
+// envelope (a step across the kink at p_e, a shock, p beyond p_s) is put
+// back onto it (porosity.hpp: porous_alpha_on_loading_curve; a state on or
+// below the envelope is left alone, so alpha still never rises).
+template <int D>
+RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  if (!mat.porosity.enabled || (s.boundary && s.boundary[a] == 1)) return;
+  s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a]);
+}
+
+// The uniform external acceleration (simulation.gravity) on free particles.
+template <int D>
+RUBBLE_HD_INLINE void body_force_particle(const RhsContext<D>& c, std::uint32_t a) {
+  if (c.s.boundary && c.s.boundary[a]) return;
+  c.s.dvdt[a] += c.body_force;
 }
 
 // ---- feature set Hydro ---------------------------------------------------
@@ -123,8 +221,9 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
-    const HydroPairRates<D> r =
-        hydro_pair<D>(c.kernel, pa, hydro_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]), !c.summation);
+    HydroParticle<D> pb = hydro_particle<D>(c, b);
+    pb.v = seen_velocity<D>(s, a, b);
+    const HydroPairRates<D> r = hydro_pair<D>(c.kernel, pa, pb, c.domain.separation(s.x[a], s.x[b]), !c.summation);
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;
@@ -150,7 +249,7 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
     const Real r = norm(dx);
     if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
     const Vec<D> g = Real(0.5) * (kernel_grad<D>(c.kernel, dx, s.h[a]) + kernel_grad<D>(c.kernel, dx, s.h[b]));
-    L += velocity_gradient_pair_term<D>(s.m[b], s.rho[b], s.v[b] - s.v[a], g);
+    L += velocity_gradient_pair_term<D>(s.m[b], s.rho[b], seen_velocity<D>(s, a, b) - s.v[a], g);
     if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], s.rho[b], -dx, g);
   });
   bool well_conditioned = true;
@@ -162,7 +261,7 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
   const MaterialParams& mat = c.mat[s.material_id[a]];
   s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
   if (c.art_R) {
-    Mat<D> sigma = s.S[a];
+    Mat<D> sigma = deviatoric_factor_particle<D>(c, a) * s.S[a];
     for (int i = 0; i < D; ++i) sigma.m[i][i] -= s.p[a];
     c.art_R[a] = mat.as_exponent > Real(0) ? artificial_stress_tensor<D>(sigma, s.rho[a], mat.as_epsilon)
                                            : Mat<D>::zero();
@@ -174,7 +273,8 @@ template <int D>
 RUBBLE_HD_INLINE SolidParticle<D> solid_particle(const RhsContext<D>& c, std::uint32_t i) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[i]];
-  return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], s.S[i],
+  const Mat<D> S = s.alpha ? deviatoric_factor_particle<D>(c, i) * s.S[i] : s.S[i];
+  return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], S,
                           c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent};
 }
 
@@ -186,7 +286,9 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
-    const SolidPairRates<D> r = solid_pair<D>(c.kernel, pa, solid_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]));
+    SolidParticle<D> pb = solid_particle<D>(c, b);
+    pb.v = seen_velocity<D>(s, a, b);
+    const SolidPairRates<D> r = solid_pair<D>(c.kernel, pa, pb, c.domain.separation(s.x[a], s.x[b]));
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;
@@ -212,6 +314,7 @@ RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32
   s.dudt[a] = 0;
   if (s.drhodt) s.drhodt[a] = 0;
   if (s.dSdt) s.dSdt[a] = Mat<D>::zero();
+  if (s.dalphadt) s.dalphadt[a] = 0;
 }
 
 // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp),
@@ -226,7 +329,7 @@ RUBBLE_HD_INLINE void xsph_particle(const RhsContext<D>& c, std::uint32_t a, Eac
       if (s.material_id[b] != s.material_id[a]) return;
       const Real r = norm(c.domain.separation(s.x[a], s.x[b]));
       const Real w = Real(0.5) * (kernel_w<D>(c.kernel, r, s.h[a]) + kernel_w<D>(c.kernel, r, s.h[b]));
-      if (w > Real(0)) sum += xsph_pair_term<D>(s.m[b], s.rho[a], s.rho[b], s.v[b] - s.v[a], w);
+      if (w > Real(0)) sum += xsph_pair_term<D>(s.m[b], s.rho[a], s.rho[b], seen_velocity<D>(s, a, b) - s.v[a], w);
     });
   }
   s.xsph_v[a] = c.xsph_epsilon * sum;
@@ -242,13 +345,19 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
   const Real cl = mat.shear_modulus > Real(0) ? elastic_signal_speed(s.cs[a], mat.shear_modulus, s.rho[a]) : s.cs[a];
   const Real dt_c = courant_dt(c.courant, hM, cl, mat.av.alpha, mat.av.beta, s.mu_max[a]);
   const Real dt_f = force_dt(c.force_factor, hM, norm(s.dvdt[a]));
-  return dt_c < dt_f ? dt_c : dt_f;
+  Real dt = dt_c < dt_f ? dt_c : dt_f;
+  if (s.dalphadt) {
+    const Real dt_a = porosity_dt_limit(s.alpha[a], s.dalphadt[a], kAlphaStepFraction);
+    dt = dt_a < dt ? dt_a : dt;
+  }
+  return dt;
 }
 
 // Whether particle a's evolved state is finite (the run stops otherwise).
 template <int D>
 RUBBLE_HD_INLINE bool finite_particle(const StoreView<D>& s, std::uint32_t a) {
   bool ok = std::isfinite(s.u[a]) && std::isfinite(s.rho[a]) && std::isfinite(s.h[a]);
+  if (s.alpha) ok = ok && std::isfinite(s.alpha[a]);
   for (int k = 0; k < D; ++k) ok = ok && std::isfinite(s.x[a][k]) && std::isfinite(s.v[a][k]);
   return ok;
 }

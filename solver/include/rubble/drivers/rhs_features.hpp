@@ -15,6 +15,9 @@ struct RhsFeatures {
   bool solid = false;              // a material has a shear modulus: feature set Solid
   bool artificial_stress = false;  // a solid material has artificial stress
   bool kernel_correction = false;  // solids: corrected velocity gradient
+  bool porosity = false;           // a material is porous: d alpha/dt after the rates
+  bool plasticity = false;         // a solid material yields: return mapping in each evaluation and step
+  bool body_force = false;         // simulation.gravity is not zero
 };
 
 // Throws RunError when the store lacks a field the features need.
@@ -24,7 +27,15 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
   for (const MaterialParams& m : materials) {
     f.solid = f.solid || m.shear_modulus > Real(0);
     f.artificial_stress = f.artificial_stress || m.as_exponent > Real(0);
+    f.porosity = f.porosity || m.porosity.enabled;
+    f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
   }
+  for (int k = 0; k < D; ++k) f.body_force = f.body_force || scene.simulation.gravity[k] != 0;
+  if (f.porosity && (scene.simulation.density == DensityForm::Summation || ps.alpha.size() != ps.n ||
+                     ps.dalphadt.size() != ps.n))
+    throw RunError("porous materials need continuity density with the alpha and dalphadt fields allocated");
+  if (f.plasticity && (!f.solid || ps.eps_p.size() != ps.n))
+    throw RunError("plasticity needs a solid with the eps_p field allocated");
   if (f.solid) {
     if (scene.simulation.density == DensityForm::Summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
       throw RunError("solids need continuity density with the S and dSdt fields allocated");

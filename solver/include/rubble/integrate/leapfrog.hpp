@@ -8,6 +8,9 @@
 //   x_{n+1} = x_n + dt v_{1/2}    (+ dt dv_XSPH,n with XSPH, xsph.hpp)
 //   evaluate a_{n+1} at x_{n+1} (with v, u predicted to t_{n+1} for the viscosity)
 //   v_{n+1} = v_{1/2} + dt/2 a_{n+1}
+//   end of step: the system's end_step() (plastic return, when a material yields)
+// The distention alpha of porous materials is evolved like u, and kept >= 1
+// (integrated_alpha); its rate is <= 0, so alpha never rises.
 #include <cstddef>
 #include <vector>
 
@@ -26,7 +29,15 @@ struct LeapfrogHalf {
   Real* u = nullptr;
   Real* rho = nullptr;
   Mat<D>* S = nullptr;
+  Real* alpha = nullptr;
 };
+
+// alpha0 + w d alpha/dt, never below 1 (full compaction); w >= 0 and
+// d alpha/dt <= 0, so alpha never rises (porosity.hpp).
+RUBBLE_HD_INLINE Real integrated_alpha(Real alpha0, Real w, Real dalphadt) {
+  const Real a = alpha0 + w * dalphadt;
+  return a > Real(1) ? a : Real(1);
+}
 
 // Second half: v, u (rho, S) from the half step with the new rates.
 template <int D>
@@ -36,6 +47,7 @@ RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>
   s.u[i] = half_state.u[i] + half * s.dudt[i];
   if (half_state.rho) s.rho[i] = half_state.rho[i] + half * s.drhodt[i];
   if (half_state.S) s.S[i] = half_state.S[i] + half * s.dSdt[i];
+  if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
 }
 
 // First half of particle i's step: kick to the half step, drift the
@@ -49,6 +61,7 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   half_state.u[i] = s.u[i] + half * s.dudt[i];
   if (half_state.rho) half_state.rho[i] = s.rho[i] + half * s.drhodt[i];
   if (half_state.S) half_state.S[i] = s.S[i] + half * s.dSdt[i];
+  if (half_state.alpha) half_state.alpha[i] = integrated_alpha(s.alpha[i], half, s.dalphadt[i]);
   // XSPH (when on) adds its correction, evaluated at the start of the step
   const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
   s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
@@ -61,8 +74,9 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   std::vector<Vec<D>> v_half(n);
   std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() ? 0 : n);
   std::vector<Mat<D>> S_half(ps.dSdt.empty() ? 0 : n);  // solids: the deviatoric stress
+  std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
   const LeapfrogHalf<D> half{v_half.data(), u_half.data(), rho_half.empty() ? nullptr : rho_half.data(),
-                             S_half.empty() ? nullptr : S_half.data()};
+                             S_half.empty() ? nullptr : S_half.data(), alpha_half.empty() ? nullptr : alpha_half.data()};
   const StoreView<D> s = ps.view();
   const Box<D> domain = sys.domain();
 #pragma omp parallel for if (n > 4096)
@@ -70,6 +84,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   sys.evaluate();
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
+  sys.end_step();
 }
 
 }  // namespace rubble

@@ -13,7 +13,9 @@
 // internal energy (c_s^2 is the medium's mechanical energy scale, so a cold
 // solid with u = 0 is not held to an absolute error of zero) and rho for
 // density, and |S| + rho c_s^2 for the deviatoric stress of solids
-// (Frobenius norms). A step with err > tol is
+// (Frobenius norms), and alpha for the distention of porous materials.
+// After the accepted combination the system's end_step() runs (the plastic
+// return, when a material yields), then the evaluation for the next k1. A step with err > tol is
 // rejected and retried; the next step size is
 //   dt_new = dt * clamp(0.9 (tol/err)^(1/3), 0.2, 2),
 // never above the Courant and force limits.
@@ -24,6 +26,7 @@
 
 #include "rubble/core/box.hpp"
 #include "rubble/core/hd.hpp"
+#include "rubble/integrate/leapfrog.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/particles/store_view.hpp"
 
@@ -47,6 +50,7 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
     y.u[i] = y0.u[i] + w * ka.dudt[i];
     if (y.drhodt) y.rho[i] = y0.rho[i] + w * ka.drhodt[i];
     if (y.dSdt) y.S[i] = y0.S[i] + w * ka.dSdt[i];
+    if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i]);
     return;
   }
   y.x[i] = domain.wrap(y0.x[i] + w * (ka.position_rate(i) + kb->position_rate(i)));
@@ -54,6 +58,7 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
   y.u[i] = y0.u[i] + w * (ka.dudt[i] + kb->dudt[i]);
   if (y.drhodt) y.rho[i] = y0.rho[i] + w * (ka.drhodt[i] + kb->drhodt[i]);
   if (y.dSdt) y.S[i] = y0.S[i] + w * (ka.dSdt[i] + kb->dSdt[i]);
+  if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i] + kb->dalphadt[i]);
 }
 
 // The scaled error of particle i: y_heun - y_rk3 = c23 [ (k1 + k2)/2 - k3 ]
@@ -78,6 +83,11 @@ RUBBLE_HD_INLINE Real rk2_error_particle(const StoreView<D>& y0, const StoreView
     const Real scale = std::sqrt(double_dot(y0.S[i], y0.S[i])) + y0.rho[i] * y0.cs[i] * y0.cs[i] + Real(1e-300);
     const Real es = std::sqrt(double_dot(dS, dS)) / scale;
     e = es > e ? es : e;
+  }
+  if (y0.dalphadt) {
+    const Real da = c23 * (Real(0.5) * (y0.dalphadt[i] + y1.dalphadt[i]) - k3.dalphadt[i]);
+    const Real ea = std::fabs(da) / y0.alpha[i];
+    e = ea > e ? ea : e;
   }
   return e;
 }
@@ -123,6 +133,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       const Real h2 = Real(0.5) * dt;
 #pragma omp parallel for if (n > 4096)
       for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, h2, domain, i);
+      sys.end_step();
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};
     }

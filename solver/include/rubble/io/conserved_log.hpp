@@ -53,7 +53,8 @@ class ConservedLog {
 // the potential of the last evaluation (0 when gravity is off).
 // Sums run in double whatever Real is.
 template <int D>
-ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt);
+ConservedRecord measure_conserved(const ParticleStore<D>& ps, double time, std::int64_t step, double dt,
+                                  const Vec<D>& g = Vec<D>::zero());
 // The record of summed terms (conserved_sums.hpp); total = kinetic + internal + gravitational.
 ConservedRecord conserved_record(const ConservedSums& sum, double time, std::int64_t step, double dt);
 

@@ -15,7 +15,7 @@ struct ConservedSums {
   double angular_momentum[3] = {0, 0, 0};  // L = sum m x cross v; 2-D: only [2]
   double kinetic = 0;                      // sum 1/2 m |v|^2
   double internal = 0;                     // sum m u
-  double gravitational = 0;                // 1/2 sum m phi (self-gravity; 0 without)
+  double gravitational = 0;                // 1/2 sum m phi (self-gravity) - sum m g.x (external field)
 
   RUBBLE_HD ConservedSums operator+(const ConservedSums& o) const {
     ConservedSums r;
@@ -33,8 +33,12 @@ struct ConservedSums {
 
 // Particle i's terms. With the missing axes zero, L = m x cross v gives L_z
 // alone in 2-D and nothing in 1-D.
+// A uniform external acceleration g (simulation.gravity) adds the potential
+// energy -m g.x of free particles (boundary particles are held, so their
+// potential is constant and left out).
 template <int D>
-RUBBLE_HD_INLINE ConservedSums conserved_particle(const StoreView<D>& s, std::size_t i) {
+RUBBLE_HD_INLINE ConservedSums conserved_particle(const StoreView<D>& s, std::size_t i,
+                                                  const Vec<D>& g = Vec<D>::zero()) {
   ConservedSums r;
   const double m = s.m[i];
   double x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
@@ -50,6 +54,8 @@ RUBBLE_HD_INLINE ConservedSums conserved_particle(const StoreView<D>& s, std::si
   r.kinetic = 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   if (s.u) r.internal = m * s.u[i];
   if (s.phi) r.gravitational = 0.5 * m * double(s.phi[i]);
+  if (!(s.boundary && s.boundary[i]))
+    for (int k = 0; k < D; ++k) r.gravitational -= m * double(g[k]) * x[k];
   return r;
 }
 

@@ -30,6 +30,9 @@ struct FieldNeeds {
   bool solid = false;               // a material has strength: S and dSdt are stored
   bool boundary = false;            // a body is made of boundary particles
   bool xsph = false;                // XSPH: the position-rate correction is stored
+  bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
+  bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
+  bool free_slip = false;           // a wall is free-slip: wall_normal is stored
 };
 
 template <int D>
@@ -73,6 +76,21 @@ struct ParticleStore {
 
   // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
   std::vector<Vec<D>> xsph_v;  // [m/s]
+
+  // p-alpha porosity (allocated only when a material is porous): the
+  // distention alpha = rho_matrix / rho >= 1 (1 for particles of non-porous
+  // materials) and its rate (physics/porosity.hpp)
+  std::vector<Real> alpha;     // [1] (evolved)
+  std::vector<Real> dalphadt;  // [1/s]
+
+  // plasticity (allocated only when a solid material has a yield criterion):
+  // the accumulated equivalent plastic strain (physics/plasticity.hpp),
+  // updated by the return mapping at the end of each step
+  std::vector<Real> eps_p;  // [1]
+
+  // free-slip walls (allocated only when a boundary body is free-slip): the
+  // wall's unit normal on its particles, zero on every other particle
+  std::vector<Vec<D>> wall_normal;  // [1]
 
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
@@ -132,6 +150,10 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"dSdt", &PS::dSdt, "Pa/s", FieldRole::Rate, false},
       {"boundary", &PS::boundary, "1", FieldRole::Constant, true},
       {"xsph_v", &PS::xsph_v, "m/s", FieldRole::Derived, false},
+      {"alpha", &PS::alpha, "1", FieldRole::Evolved, true},
+      {"dalphadt", &PS::dalphadt, "1/s", FieldRole::Rate, false},
+      {"eps_p", &PS::eps_p, "1", FieldRole::Evolved, true},
+      {"wall_normal", &PS::wall_normal, "1", FieldRole::Constant, false},
   };
   return table;
 }
@@ -167,6 +189,12 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   }
   if (needs.boundary) boundary.assign(n, 0);
   if (needs.xsph) xsph_v.assign(n, Vec<D>::zero());
+  if (needs.porosity) {
+    alpha.assign(n, 1);
+    dalphadt.assign(n, 0);
+  }
+  if (needs.plasticity) eps_p.assign(n, 0);
+  if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
 }
 
 template <int D>

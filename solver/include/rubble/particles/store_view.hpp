@@ -39,6 +39,10 @@ struct StoreView {
   Mat<D>* dSdt = nullptr;
   std::int32_t* boundary = nullptr;
   Vec<D>* xsph_v = nullptr;
+  Real* alpha = nullptr;
+  Real* dalphadt = nullptr;
+  Real* eps_p = nullptr;
+  Vec<D>* wall_normal = nullptr;
 
   // Point the field called `name` (the field table's names) at `ptr`;
   // false if the name is unknown or the element type does not match.
@@ -58,6 +62,8 @@ struct StoreView {
     set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
     set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
+    set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p");
+    set(wall_normal, "wall_normal");
     return ok;
   }
 

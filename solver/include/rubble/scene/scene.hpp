@@ -41,6 +41,9 @@ struct SimulationConfig {
   // XSPH (Monaghan 1989): particles drift with v + eps * (smoothed v_b - v_a);
   // eps in [0, 1], 0 = off (physics/xsph.hpp).
   double xsph = 0;
+  // A uniform external acceleration g [m/s^2] (D entries; all zero = off),
+  // e.g. [0, -9.81] in 2-D; its potential energy -m g.x is in conserved.csv.
+  std::array<double, 3> gravity{};
 };
 
 struct ArtificialViscosity {
@@ -90,6 +93,35 @@ struct ArtificialStressConfig {
   double n = 4;          // exponent of f_ab = W(r)/W(dp)
 };
 
+// p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009); Murnaghan
+// and Tillotson matrices only. porosity = { model = "p_alpha", ... }; docs/scene.md.
+enum class CrushCurveType : int { Quadratic = 0, Steep = 1 };
+struct PorosityConfig {
+  bool enabled = false;
+  CrushCurveType crush_curve = CrushCurveType::Quadratic;
+  double alpha0 = 1;   // initial distention = alpha at the elastic limit (> 1)
+  double p_e = 0;      // [Pa] elastic limit (>= 0)
+  double p_s = 0;      // [Pa] full-compaction pressure (> p_e)
+  double p_t = 0;      // [Pa] steep curve: transition pressure (p_e < p_t < p_s)
+  double alpha_t = 1;  // steep curve: distention at p_t (1 < alpha_t < alpha0)
+  double n1 = 0, n2 = 0;  // steep curve exponents (> 0)
+  double c_e = 0;      // [m/s] porous elastic sound speed (> 0, < c_s0)
+  double c_s0 = 0;     // [m/s] matrix sound speed (> c_e)
+};
+
+// Plasticity of a solid (shear_modulus > 0): von Mises or Drucker-Prager
+// (Bui, Fukagawa, Sako & Ohno 2008); plasticity = { model = ..., ... }.
+enum class PlasticityType : int { None = 0, VonMises = 1, DruckerPrager = 2 };
+enum class ConeFit : int { PlaneStrain = 0, Compression = 1 };
+struct PlasticityConfig {
+  PlasticityType model = PlasticityType::None;
+  double yield_stress = 0;     // [Pa] von Mises Y (> 0)
+  double friction_angle = 0;   // [deg] Drucker-Prager phi, in [0, 90)
+  double cohesion = 0;         // [Pa] c >= 0
+  double dilatancy_angle = 0;  // [deg] psi, 0 <= psi <= phi
+  ConeFit cone = ConeFit::PlaneStrain;
+};
+
 struct MaterialConfig {
   std::string name;     // the key under [materials]
   std::string library;       // library material name or file as written ("" = inline)
@@ -105,6 +137,8 @@ struct MaterialConfig {
   ArtificialConductivity conductivity;
   double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid
   ArtificialStressConfig artificial_stress;
+  PorosityConfig porosity;      // off unless the material has a porosity table
+  PlasticityConfig plasticity;  // none unless the material has a plasticity table
 };
 
 // Box: min..max. Sphere (a disk in 2-D, a segment in 1-D): center, radius.
@@ -133,6 +167,11 @@ struct BodyConfig {
   // prescribed (dynamic boundary particles, Crespo et al. 2007; a clamp
   // that carries stress). "frozen" (default): they keep their initial state.
   bool boundary_evolving = false;
+  // Walls (boundary bodies): wall_slip = "free_slip" makes the wall
+  // frictionless: its particles' relative velocity to a neighbour counts
+  // only along wall_normal (unit, pointing into the material). Default no-slip.
+  bool wall_free_slip = false;
+  std::array<double, 3> wall_normal{};
   // shape = "polytrope" (3-D only): a self-gravitating polytrope in
   // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
   // solution; K follows from radius, mass, n and gravity.G. The parser
