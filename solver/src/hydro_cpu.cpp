@@ -236,14 +236,6 @@ void HydroCpu<D>::xsph_velocity() {
 }
 
 template <int D>
-void HydroCpu<D>::porosity_rates() {
-  const std::size_t n = ps_.n;
-  const RhsContext<D> c = context();
-#pragma omp parallel for if (n > 4096)
-  for (std::size_t a = 0; a < n; ++a) porosity_rate_particle<D>(c, static_cast<std::uint32_t>(a));
-}
-
-template <int D>
 void HydroCpu<D>::plastic_return(bool accumulate) {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
@@ -260,12 +252,12 @@ void HydroCpu<D>::body_force() {
 }
 
 template <int D>
-void HydroCpu<D>::end_step() {
+void HydroCpu<D>::end_step(const Real* alpha_start) {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
   if (porosity_) {
 #pragma omp parallel for if (n > 4096)
-    for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
+    for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a), alpha_start);
   }
   if (!plasticity_) return;
   // the pressure of the final state first: the return works at fixed p
@@ -305,7 +297,6 @@ void HydroCpu<D>::evaluate() {
   if (gravity_.enabled()) self_gravity();
   if (body_force_) body_force();
   if (!ps_.boundary.empty()) hold_boundaries();
-  if (porosity_) porosity_rates();  // needs the held boundaries' zero rates
   if (xsph_epsilon_ > Real(0)) xsph_velocity();
 }
 

@@ -31,7 +31,8 @@ class HydroCpu {
   // After the integrator's last update of a step: porous states back onto
   // the loading envelope, and the plastic return mapping (with plastic-strain
   // accumulation) at the step's final state. Nothing when neither is used.
-  void end_step();
+  // alpha_start: the distention at the start of the step (porous runs).
+  void end_step(const Real* alpha_start);
   // Largest stable time step at the last evaluated state (Courant and force limits).
   Real dt_limit();
 
@@ -59,7 +60,6 @@ class HydroCpu {
   void hold_boundaries();
   void self_gravity();
   void xsph_velocity();  // XSPH correction to dx/dt (when simulation.xsph > 0)
-  void porosity_rates();  // d alpha/dt of porous materials (after the rates)
   void plastic_return(bool accumulate);  // yield: S back onto the surface
   void body_force();      // simulation.gravity
 

@@ -1163,14 +1163,10 @@ Scene SceneReader::read(const toml::table& root) {
   const toml::table* sim_table = table(root, "simulation", "");
   const bool density_given = sim_table && sim_table->contains("density");
   for (const MaterialConfig& m : scene.materials) {
-    const bool needs_continuity = m.shear_modulus > 0 || m.porosity.enabled;
-    if (!needs_continuity || scene.simulation.density == DensityForm::Continuity) continue;
+    if (!(m.shear_modulus > 0) || scene.simulation.density == DensityForm::Continuity) continue;
     if (density_given)
       fail("simulation.density",
-           "material '" + m.name + "' is " +
-               (m.porosity.enabled ? std::string("porous (its distention evolves with d rho/dt)")
-                                   : std::string("a solid (shear_modulus > 0)")) +
-               ", which needs density = \"continuity\"",
+           "material '" + m.name + "' is a solid (shear_modulus > 0), which needs density = \"continuity\"",
            sim_table->get("density"));
     scene.simulation.density = DensityForm::Continuity;
   }

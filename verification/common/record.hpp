@@ -85,6 +85,29 @@ inline void write_record(const std::filesystem::path& dir, const std::string& fi
   if (!f) throw std::runtime_error("cannot write record " + (dir / (file_stem + ".json")).string());
 }
 
+// The exit status of a rung from its judged checks. A rung's ctest test
+// fails when a check fails, unless the check is a documented known failure:
+// `known_failures` lists name prefixes (given on the command line with the
+// reason next to it in the rung's CMakeLists.txt). A known failure still
+// shows as FAIL in its record and in the ladder report; if it starts to
+// pass, the test fails too, so that the entry is removed and the check
+// gates again.
+inline int rung_exit_status(const std::vector<Check>& checks, const std::vector<std::string>& known_failures) {
+  int status = 0;
+  for (const Check& c : checks) {
+    bool known = false;
+    for (const std::string& k : known_failures) known = known || c.name.rfind(k, 0) == 0;
+    if (!known && !c.passed()) status = 1;
+    if (known && c.passed()) {
+      std::fprintf(stderr, "known failure now passes: '%s'; remove it from the rung's --known-failure list\n",
+                   c.name.c_str());
+      status = 1;
+    }
+    if (known && !c.passed()) std::fprintf(stderr, "known failure (reported, not gating): '%s'\n", c.name.c_str());
+  }
+  return status;
+}
+
 // Least-squares slope of log(error) against log(resolution), negated: the
 // observed order of convergence over a whole ladder.
 inline double observed_order(const std::vector<double>& resolution, const std::vector<double>& error) {

@@ -440,7 +440,7 @@ struct CudaStepper<D>::Impl {
   GridNeighbors<D> grid{};
   // integrator scratch
   DeviceArray<Vec<D>> v_half;
-  DeviceArray<Real> u_half, rho_half, alpha_half;
+  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
   DeviceOctree octree;  // Barnes-Hut (3-D)
@@ -663,9 +663,7 @@ struct CudaStepper<D>::Impl {
     if (c.s.boundary)
       for_each_index("hold boundaries", count,
                      [=] __device__(std::size_t i) { hold_boundary_particle<D>(c, std::uint32_t(i)); });
-    if (porosity)
-      for_each_index("porosity rates", count,
-                     [=] __device__(std::size_t i) { porosity_rate_particle<D>(c, std::uint32_t(i)); });
+
     if (xsph_epsilon > Real(0))
       for_each_index("xsph", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
@@ -715,11 +713,12 @@ struct CudaStepper<D>::Impl {
   }
 
   // After the integrator's last update of a step (hydro_cpu.hpp: end_step).
-  void end_step() {
+  void end_step(const Real* alpha_start) {
     const RhsContext<D> c = context();
     if (porosity)
-      for_each_index("end-of-step porosity", n(),
-                     [=] __device__(std::size_t i) { porosity_end_step_particle<D>(c, std::uint32_t(i)); });
+      for_each_index("end-of-step porosity", n(), [=] __device__(std::size_t i) {
+        porosity_end_step_particle<D>(c, std::uint32_t(i), alpha_start);
+      });
     if (!plasticity) return;
     for_each_index("end-of-step equation of state", n(),
                    [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
@@ -741,7 +740,11 @@ struct CudaStepper<D>::Impl {
     u_half.resize(count);
     if (s.drhodt) rho_half.resize(count);
     if (s.dSdt) S_half.resize(count);
-    if (s.dalphadt) alpha_half.resize(count);
+    if (s.dalphadt) {
+      alpha_half.resize(count);
+      alpha_start.resize(count);
+      RUBBLE_CUDA(cudaMemcpy(alpha_start.data(), s.alpha, count * sizeof(Real), cudaMemcpyDeviceToDevice));
+    }
     const LeapfrogHalf<D> half{v_half.data(), u_half.data(), s.drhodt ? rho_half.data() : nullptr,
                                s.dSdt ? S_half.data() : nullptr, s.dalphadt ? alpha_half.data() : nullptr};
     const Box<D> dom = domain;
@@ -749,7 +752,7 @@ struct CudaStepper<D>::Impl {
                    [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
     evaluate();
     for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
-    end_step();
+    end_step(s.dalphadt ? alpha_start.data() : nullptr);
   }
 
   Rk2Result rk2(Real dt, Real tol, Real dt_min) {
@@ -782,7 +785,7 @@ struct CudaStepper<D>::Impl {
         for_each_index("rk2 final", count, [=] __device__(std::size_t i) {
           rk2_combine<D>(y, v0, v0, &v1, h2, dom, i);
         });
-        end_step();
+        end_step(v0.alpha);
         evaluate();  // k1 of the next step
         return {dt, dt * factor, rejections};
       }

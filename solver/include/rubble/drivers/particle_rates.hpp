@@ -150,17 +150,19 @@ RUBBLE_HD_INLINE Real deviatoric_factor_particle(const RhsContext<D>& c, std::ui
   return mat.porosity.enabled ? porous_deviatoric_factor(mat.porosity, c.s.alpha[a]) : Real(1);
 }
 
-// d alpha/dt of particle a from the chain rule, once d rho/dt and du/dt are
-// known (porosity.hpp: porosity_dalpha_dt); 0 for non-porous materials and
-// frozen boundary particles.
+// d alpha/dt of particle a from the chain rule, given its d rho/dt and
+// du/dt (porosity.hpp: porosity_dalpha_dt); 0 for non-porous materials and
+// frozen boundary particles. Called by the rate passes as soon as the pair
+// sums are done: d rho/dt is the SPH continuity rate, which summation
+// density computes too (hydro.hpp), so porous fluids may use either form.
 template <int D>
-RUBBLE_HD_INLINE void porosity_rate_particle(const RhsContext<D>& c, std::uint32_t a) {
+RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32_t a, Real drhodt, Real dudt) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
   const bool frozen = s.boundary && s.boundary[a] == 1;
-  s.dalphadt[a] = (mat.porosity.enabled && !frozen)
-                      ? porosity_dalpha_dt(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a], s.drhodt[a], s.dudt[a])
-                      : Real(0);
+  return (mat.porosity.enabled && !frozen)
+             ? porosity_dalpha_dt(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a], drhodt, dudt)
+             : Real(0);
 }
 
 // The plastic return mapping of particle a's deviatoric stress onto its
@@ -184,16 +186,22 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   if (accumulate) s.eps_p[a] += r.deps_p;
 }
 
-// End of an accepted step: a porous state that overshot the loading
-// envelope (a step across the kink at p_e, a shock, p beyond p_s) is put
-// back onto it (porosity.hpp: porous_alpha_on_loading_curve; a state on or
-// below the envelope is left alone, so alpha still never rises).
+// End of an accepted step: alpha is returned to the loading envelope from
+// its value at the start of the step, alpha = alpha_env(rho, u; <= alpha_start)
+// (porosity.hpp: porous_alpha_on_loading_curve). On loading this puts the
+// state exactly on the envelope at the step's final (rho, u), whether the
+// chain-rule stages overshot it (a step across the kink at p_e, a shock,
+// p beyond p_s) or fell short of it (an explicit stage just below the
+// envelope sees d alpha/dt = 0, which alone would make the scheme first
+// order); on unloading, or below the envelope, alpha_start is kept. So the
+// accepted alpha is min over the path of alpha_env and never rises; the
+// chain rule supplies the stage values, the step control and the rates.
 template <int D>
-RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
+RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::uint32_t a, const Real* alpha_start) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
   if (!mat.porosity.enabled || (s.boundary && s.boundary[a] == 1)) return;
-  s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a]);
+  s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], alpha_start[a]);
 }
 
 // The uniform external acceleration (simulation.gravity) on free particles.
@@ -232,6 +240,7 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   if (!c.summation) s.drhodt[a] = drhodt;
+  if (s.dalphadt) s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
   s.mu_max[a] = mu_max;
 }
 
@@ -297,6 +306,7 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   s.drhodt[a] = drhodt;
+  if (s.dalphadt) s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
   s.mu_max[a] = mu_max;
 }
 

@@ -15,7 +15,7 @@ struct RhsFeatures {
   bool solid = false;              // a material has a shear modulus: feature set Solid
   bool artificial_stress = false;  // a solid material has artificial stress
   bool kernel_correction = false;  // solids: corrected velocity gradient
-  bool porosity = false;           // a material is porous: d alpha/dt after the rates
+  bool porosity = false;           // a material is porous: d alpha/dt with the rates, end-of-step envelope return
   bool plasticity = false;         // a solid material yields: return mapping in each evaluation and step
   bool body_force = false;         // simulation.gravity is not zero
 };
@@ -31,9 +31,8 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
   }
   for (int k = 0; k < D; ++k) f.body_force = f.body_force || scene.simulation.gravity[k] != 0;
-  if (f.porosity && (scene.simulation.density == DensityForm::Summation || ps.alpha.size() != ps.n ||
-                     ps.dalphadt.size() != ps.n))
-    throw RunError("porous materials need continuity density with the alpha and dalphadt fields allocated");
+  if (f.porosity && (ps.alpha.size() != ps.n || ps.dalphadt.size() != ps.n))
+    throw RunError("porous materials need the alpha and dalphadt fields allocated");
   if (f.plasticity && (!f.solid || ps.eps_p.size() != ps.n))
     throw RunError("plasticity needs a solid with the eps_p field allocated");
   if (f.solid) {

@@ -8,7 +8,8 @@
 //   x_{n+1} = x_n + dt v_{1/2}    (+ dt dv_XSPH,n with XSPH, xsph.hpp)
 //   evaluate a_{n+1} at x_{n+1} (with v, u predicted to t_{n+1} for the viscosity)
 //   v_{n+1} = v_{1/2} + dt/2 a_{n+1}
-//   end of step: the system's end_step() (plastic return, when a material yields)
+//   end of step: the system's end_step(alpha_n) (porous states back onto the
+//   loading envelope from alpha_n; plastic return, when a material yields)
 // The distention alpha of porous materials is evolved like u, and kept >= 1
 // (integrated_alpha); its rate is <= 0, so alpha never rises.
 #include <cstddef>
@@ -75,6 +76,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() ? 0 : n);
   std::vector<Mat<D>> S_half(ps.dSdt.empty() ? 0 : n);  // solids: the deviatoric stress
   std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
+  const std::vector<Real> alpha_start = ps.alpha;               // and its value at the start (end_step)
   const LeapfrogHalf<D> half{v_half.data(), u_half.data(), rho_half.empty() ? nullptr : rho_half.data(),
                              S_half.empty() ? nullptr : S_half.data(), alpha_half.empty() ? nullptr : alpha_half.data()};
   const StoreView<D> s = ps.view();
@@ -84,7 +86,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   sys.evaluate();
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
-  sys.end_step();
+  sys.end_step(alpha_start.empty() ? nullptr : alpha_start.data());
 }
 
 }  // namespace rubble

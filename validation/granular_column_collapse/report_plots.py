@@ -1,0 +1,162 @@
+"""Extra report plots for the granular column collapse rung (called by ci/report).
+
+Column cases (records with "snapshots"/"profile"): the collapse at several
+times coloured by the accumulated plastic strain eps_p (finest resolution),
+the final free-surface profiles of every resolution over the experimental
+profile and failure line of Bui et al. 2008 (as digitised, see the records'
+reference_sources) with the fitted failure lines, and the kinetic-energy
+history. Aspect-ratio sweep (records with "sweep"): (L_inf - L0)/L0 and
+H_inf/L0 against a = H0/L0 with the fitted power laws beside the 2-D laws of
+Lube et al. 2005 and Lajeunesse et al. 2005 (as quoted by secondary sources).
+"""
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def _lube(a):
+    return 1.2 * a if a <= 1.8 else 1.9 * a ** (2.0 / 3.0)
+
+
+def _lajeunesse(a):
+    return 1.8 * a if a < 3.0 else 2.3 * a ** (2.0 / 3.0)
+
+
+def _column_plots(case, recs, out_dir):
+    images = []
+    recs = sorted(recs, key=lambda r: r["resolution"])
+    shots_rec = next((r for r in reversed(recs) if r.get("snapshots")), None)
+    if shots_rec:
+        shots = shots_rec["snapshots"]
+        n = len(shots)
+        fig, axes = plt.subplots(n, 1, figsize=(9, 1.45 * n + 0.6), squeeze=False, sharex=True)
+        vmax = max(1.0, max(max(s["eps_p"]) for s in shots if s["eps_p"]))
+        vmax = min(vmax, 3.0)
+        sc = None
+        for ax, s in zip(axes[:, 0], shots):
+            sc = ax.scatter(s["x"], s["y"], c=s["eps_p"], s=0.6, cmap="viridis", vmin=0.0, vmax=vmax)
+            ax.set_aspect("equal")
+            ax.set_xlim(-0.01, max(0.5, shots_rec["runout"]["toe"] + 0.02))
+            ax.set_ylim(-0.005, 0.11 * shots_rec["H0"] / 0.1)
+            ax.text(0.99, 0.85, f"t = {s['t']:.3f} s", transform=ax.transAxes, ha="right", fontsize=8)
+            ax.set_ylabel("y [m]", fontsize=8)
+            ax.tick_params(labelsize=7)
+        axes[-1, 0].set_xlabel("x [m]")
+        fig.colorbar(sc, ax=axes[:, 0].tolist(), shrink=0.8, label="$\\varepsilon_p$ (clipped at %.1f)" % vmax)
+        fig.suptitle(f"column collapse ({case}), H0/dx = {shots_rec['resolution']:g}", fontsize=10)
+        name = f"granular_column_collapse-{case}-snapshots.png"
+        fig.savefig(out_dir / name, dpi=110)
+        plt.close(fig)
+        images.append((f"collapse coloured by eps_p, H0/dx = {shots_rec['resolution']:g}", name))
+
+    fig, ax = plt.subplots(figsize=(9, 3.6))
+    ref = recs[-1]
+    exact = ref["profile"]["exact"]
+    ax.plot(exact["x"], exact["h"], "ks", ms=4, label="experiment, surface (Bui et al. 2008, digitised)")
+    fl = ref["failure_line"]
+    ax.plot(fl["experiment_x"], fl["experiment_y"], "k^--", ms=4, lw=0.8,
+            label=f"experiment, failure line ({fl['experiment_angle']:.1f} deg fit)")
+    for r in recs:
+        p = r["profile"]
+        line, = ax.plot(p["x"], p["h"], lw=1.2,
+                        label=f"H0/dx = {r['resolution']:g}: toe {r['runout']['toe']:.3f} m")
+        end = r["failure_line"]["end"]
+        if end.get("slope") is not None and end.get("x"):
+            xs = [min(end["x"]), max(end["x"])]
+            ax.plot(xs, [end["intercept"] + end["slope"] * x for x in xs], ls=":", color=line.get_color(),
+                    label=f"  failure line (eps_p > {r['failure_line']['threshold']:g}) {end['angle']:.1f} deg")
+    ax.axvline(ref["runout"]["lube2005"], color="grey", ls="--", lw=0.7, label="Lube 2005 law runout")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("height [m]")
+    ax.set_xlim(0, max(0.5, max(r["runout"]["toe"] for r in recs) + 0.02))
+    ax.set_ylim(0, 0.11 * ref["H0"] / 0.1)
+    ax.legend(fontsize=6.5, ncol=2)
+    ax.set_title(f"final profiles ({case})", fontsize=10)
+    fig.tight_layout()
+    name = f"granular_column_collapse-{case}-profiles_final.png"
+    fig.savefig(out_dir / name, dpi=110)
+    plt.close(fig)
+    images.append(("final free-surface profiles and failure lines against the experiment", name))
+
+    fig, ax = plt.subplots(figsize=(6, 3.4))
+    for r in recs:
+        k = r.get("kinetic")
+        if not k or not k.get("t"):
+            continue
+        ax.semilogy(k["t"], [max(v / k["peak"], 1e-12) for v in k["ke"]], label=f"H0/dx = {r['resolution']:g}")
+    ax.axhline(1e-4, color="r", ls="--", lw=0.8, label="at rest: 1e-4 of the peak")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("kinetic energy / peak")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    name = f"granular_column_collapse-{case}-kinetic.png"
+    fig.savefig(out_dir / name, dpi=100)
+    plt.close(fig)
+    images.append(("kinetic energy history", name))
+    return images
+
+
+def _sweep_plots(case, recs, out_dir):
+    images = []
+    for r in sorted(recs, key=lambda r: r["resolution"]):
+        s = r["sweep"]
+        a = s["a"]
+        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+        aa = [0.3 * (30 / 0.3) ** (i / 200) for i in range(201)]
+        ax[0].loglog(a, s["normalised_runout"], "o", ms=6, label=f"rubble, slope {s['slope_runout']:.2f}")
+        # fitted power law through the points
+        la = [math.log(x) for x in a]
+        ly = [math.log(y) for y in s["normalised_runout"]]
+        c = sum(ly) / len(ly) - s["slope_runout"] * sum(la) / len(la)
+        ax[0].loglog(aa, [math.exp(c) * x ** s["slope_runout"] for x in aa], "C0-", lw=0.8)
+        ax[0].loglog(aa, [_lube(x) for x in aa], "k--", lw=0.9, label="Lube et al. 2005 (1.2a; 1.9a^(2/3))")
+        ax[0].loglog(aa, [_lajeunesse(x) for x in aa], "k:", lw=0.9,
+                     label="Lajeunesse et al. 2005 (1.8a; 2.3a^(2/3))")
+        ax[0].set_xlim(0.3, 8)
+        ax[0].set_xlabel("a = H0/L0")
+        ax[0].set_ylabel("(L_inf - L0)/L0")
+        ax[0].legend(fontsize=7)
+        ax[1].loglog(a, s["normalised_height"], "o", ms=6, label=f"rubble, slope {s['slope_height']:.2f}")
+        ly = [math.log(y) for y in s["normalised_height"]]
+        c = sum(ly) / len(ly) - s["slope_height"] * sum(la) / len(la)
+        ax[1].loglog(aa, [math.exp(c) * x ** s["slope_height"] for x in aa], "C0-", lw=0.8)
+        ax[1].loglog(aa, aa, "k--", lw=0.6, label="H_inf = H0 (no collapse)")
+        ax[1].set_xlim(0.3, 8)
+        ax[1].set_xlabel("a = H0/L0")
+        ax[1].set_ylabel("H_inf/L0")
+        ax[1].legend(fontsize=7)
+        fig.suptitle(f"aspect-ratio sweep ({case}), dx = {r['dx']:g} m (laws as quoted by secondary sources)",
+                     fontsize=10)
+        fig.tight_layout()
+        name = f"granular_column_collapse-{case}-runout_vs_a-{r['resolution']:g}.png"
+        fig.savefig(out_dir / name, dpi=110)
+        plt.close(fig)
+        images.append((f"normalised runout and height against a, resolution {r['resolution']:g}", name))
+
+        fig, ax = plt.subplots(figsize=(9, 3.4))
+        for run in s["runs"]:
+            ax.plot(run["profile_x"], run["profile_h"], label=f"a = {run['a']:.3g}")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("height [m]")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        name = f"granular_column_collapse-{case}-sweep_profiles-{r['resolution']:g}.png"
+        fig.savefig(out_dir / name, dpi=100)
+        plt.close(fig)
+        images.append((f"final profiles of the sweep, resolution {r['resolution']:g}", name))
+    return images
+
+
+def plots(case, records, out_dir: Path):
+    sweep = [r for r in records if r.get("sweep")]
+    column = [r for r in records if r.get("profile") and r.get("failure_line")]
+    images = []
+    if column:
+        images += _column_plots(case, column, out_dir)
+    if sweep:
+        images += _sweep_plots(case, sweep, out_dir)
+    return images
