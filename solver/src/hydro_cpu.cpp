@@ -259,10 +259,12 @@ void HydroCpu<D>::end_step(const Real* alpha_start) {
 #pragma omp parallel for if (n > 4096)
     for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a), alpha_start);
   }
-  if (!plasticity_) return;
-  // the pressure of the final state first: the return works at fixed p
+  if (!plasticity_ && !porosity_) return;
+  // The pressure of the final state: the plastic return works at fixed p,
+  // and the stored p, c_s of a leapfrog step then belong to the state it
+  // returns (snapshots, the next step limit), not to its predicted state.
   equation_of_state();
-  plastic_return(true);
+  if (plasticity_) plastic_return(true);
 }
 
 template <int D>

@@ -252,6 +252,8 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   for (const MaterialConfig& m : scene.materials) {
     needs.porosity = needs.porosity || m.porosity.enabled;
     needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;
+    needs.dilatancy = needs.dilatancy ||
+                      (m.plasticity.model == PlasticityType::DruckerPrager && m.plasticity.dilatancy_angle > 0);
   }
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);

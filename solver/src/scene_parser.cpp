@@ -1163,6 +1163,9 @@ Scene SceneReader::read(const toml::table& root) {
   const toml::table* sim_table = table(root, "simulation", "");
   const bool density_given = sim_table && sim_table->contains("density");
   for (const MaterialConfig& m : scene.materials) {
+    // porous fluids may use either form, but default to continuity like solids
+    // (their free surfaces, e.g. a porous target's, need it)
+    if (m.porosity.enabled && !(m.shear_modulus > 0) && !density_given) scene.simulation.density = DensityForm::Continuity;
     if (!(m.shear_modulus > 0) || scene.simulation.density == DensityForm::Continuity) continue;
     if (density_given)
       fail("simulation.density",

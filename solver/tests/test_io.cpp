@@ -76,6 +76,7 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.boundary = true;  // boundary flags
   needs.porosity = true;    // alpha (a snapshot field) and dalphadt
   needs.plasticity = true;  // eps_p (a snapshot field)
+  needs.dilatancy = true;   // eps_v (a snapshot field)
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -250,6 +251,7 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.boundary.clear();  // no boundary bodies
   ps.alpha.clear();     // no porosity
   ps.eps_p.clear();     // no plasticity
+  ps.eps_v.clear();     // no dilatancy
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;

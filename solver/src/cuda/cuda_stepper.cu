@@ -719,9 +719,10 @@ struct CudaStepper<D>::Impl {
       for_each_index("end-of-step porosity", n(), [=] __device__(std::size_t i) {
         porosity_end_step_particle<D>(c, std::uint32_t(i), alpha_start);
       });
-    if (!plasticity) return;
+    if (!plasticity && !porosity) return;
     for_each_index("end-of-step equation of state", n(),
                    [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
+    if (!plasticity) return;
     for_each_index("end-of-step plastic return", n(),
                    [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), true); });
   }

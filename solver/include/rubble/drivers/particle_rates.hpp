@@ -125,13 +125,15 @@ RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint3
 template <int D>
 RUBBLE_HD_INLINE void eos_particle(const RhsContext<D>& c, std::uint32_t a) {
   const MaterialParams& mat = c.mat[c.s.material_id[a]];
+  // dilatant plastic flow: the EOS sees the elastic density rho exp(eps_v)
+  const Real rho = c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
   Real p, c2;
   if (mat.porosity.enabled) {
-    const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, c.s.rho[a], c.s.u[a], c.s.alpha[a]);
+    const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, rho, c.s.u[a], c.s.alpha[a]);
     p = e.p;
     c2 = e.c2;
   } else {
-    const EosState e = eos_evaluate(mat.eos, c.s.rho[a], c.s.u[a]);
+    const EosState e = eos_evaluate(mat.eos, rho, c.s.u[a]);
     p = e.p;
     c2 = e.c2;
   }
@@ -172,7 +174,12 @@ RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32
 // increment; the returns inside an evaluation (stage states the integrator
 // discards) only keep the stress on the surface. Tension beyond the
 // Drucker-Prager apex is capped at the apex pressure for this evaluation
-// (the EOS has no memory of it: the next evaluation starts again from p(rho, u)).
+// (the EOS has no memory of it: the next evaluation starts again from p(rho, u),
+// so a granular material that opened in tension closes again without
+// pressure). The dilatant part of the flow (psi > 0) does persist: at the
+// end of each step eps_v grows by the return's deps_v, and the EOS then
+// sees the elastic density rho exp(eps_v), whose pressure is the returned
+// p + K deps_v to first order.
 template <int D>
 RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint32_t a, bool accumulate) {
   const StoreView<D>& s = c.s;
@@ -183,7 +190,10 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], s.p[a], f * mat.shear_modulus, K);
   s.S[a] = (Real(1) / f) * r.S;
   s.p[a] = r.p;
-  if (accumulate) s.eps_p[a] += r.deps_p;
+  if (accumulate) {
+    s.eps_p[a] += r.deps_p;
+    if (s.eps_v) s.eps_v[a] += r.deps_v;
+  }
 }
 
 // End of an accepted step: alpha is returned to the loading envelope from

@@ -33,6 +33,7 @@ struct FieldNeeds {
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
   bool free_slip = false;           // a wall is free-slip: wall_normal is stored
+  bool dilatancy = false;           // a Drucker-Prager material dilates (psi > 0): eps_v is stored
 };
 
 template <int D>
@@ -87,6 +88,10 @@ struct ParticleStore {
   // the accumulated equivalent plastic strain (physics/plasticity.hpp),
   // updated by the return mapping at the end of each step
   std::vector<Real> eps_p;  // [1]
+  // dilatant plastic flow (allocated only when a material has psi > 0): the
+  // accumulated plastic volumetric strain; the EOS sees the elastic density
+  // rho exp(eps_v) (physics.md, "Plasticity")
+  std::vector<Real> eps_v;  // [1]
 
   // free-slip walls (allocated only when a boundary body is free-slip): the
   // wall's unit normal on its particles, zero on every other particle
@@ -153,6 +158,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"alpha", &PS::alpha, "1", FieldRole::Evolved, true},
       {"dalphadt", &PS::dalphadt, "1/s", FieldRole::Rate, false},
       {"eps_p", &PS::eps_p, "1", FieldRole::Evolved, true},
+      {"eps_v", &PS::eps_v, "1", FieldRole::Evolved, true},
       {"wall_normal", &PS::wall_normal, "1", FieldRole::Constant, false},
   };
   return table;
@@ -194,6 +200,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
     dalphadt.assign(n, 0);
   }
   if (needs.plasticity) eps_p.assign(n, 0);
+  if (needs.dilatancy) eps_v.assign(n, 0);
   if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
 }
 

@@ -42,6 +42,7 @@ struct StoreView {
   Real* alpha = nullptr;
   Real* dalphadt = nullptr;
   Real* eps_p = nullptr;
+  Real* eps_v = nullptr;
   Vec<D>* wall_normal = nullptr;
 
   // Point the field called `name` (the field table's names) at `ptr`;
@@ -62,7 +63,7 @@ struct StoreView {
     set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
     set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
-    set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p");
+    set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p"), set(eps_v, "eps_v");
     set(wall_normal, "wall_normal");
     return ok;
   }
