@@ -67,6 +67,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "../../verification/common/args.hpp"
 #include "../../verification/common/conserved_csv.hpp"
 #include "../../verification/common/record.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -135,36 +136,16 @@ struct Args {
   std::vector<std::string> known_failures;  // --known-failure TEXT (record.hpp: rung_exit_status)
 };
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(std::stod(item));
-  return v;
-}
-
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--part") a.part = next();
-    else if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--report-only") a.report_only = true;
-    else if (k == "--known-failure") a.known_failures.push_back(next());
-    else if (k == "--keep") a.keep = true;
-    else if (k == "--resolutions") a.resolutions = parse_list(next());
-    else if (k == "--resolution") a.resolution = std::stod(next());
-    else if (k == "--aspects") a.aspects = parse_list(next());
-    else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--part", a.part) || r.value("--scene", a.scene) || r.value("--records", a.records) ||
+          r.value("--out", a.out) || r.value("--label", a.label) || r.append("--set", a.sets) ||
+          r.flag("--report-only", a.report_only) || r.append("--known-failure", a.known_failures) ||
+          r.flag("--keep", a.keep) || r.list("--resolutions", a.resolutions) ||
+          r.value("--resolution", a.resolution) || r.list("--aspects", a.aspects)))
+      r.unknown();
   if (a.scene.empty()) throw std::runtime_error("need --scene");
   if (a.part == "column") {
     if (a.resolutions.empty()) throw std::runtime_error("--part column needs --resolutions");

@@ -77,6 +77,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/args.hpp"
 #include "../common/record.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/integrate/leapfrog.hpp"
@@ -103,26 +104,13 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--part") a.part = next();
-    else if (k == "--case") a.which_case = next();
-    else if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--levels") a.levels = std::stoi(next());
-    else if (k == "--checks") a.checks = true;
-    else if (k == "--known-failure") a.known_failures.push_back(next());
-    else if (k == "--resolutions") {
-      std::stringstream ss(next());
-      for (std::string item; std::getline(ss, item, ',');) a.resolutions.push_back(std::stod(item));
-    } else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--part", a.part) || r.value("--case", a.which_case) || r.value("--scene", a.scene) ||
+          r.value("--records", a.records) || r.value("--label", a.label) || r.append("--set", a.sets) ||
+          r.value("--levels", a.levels) || r.flag("--checks", a.checks) ||
+          r.append("--known-failure", a.known_failures) || r.list("--resolutions", a.resolutions)))
+      r.unknown();
   if (a.part != "forced" && a.part != "piston") throw std::runtime_error("--part forced|piston");
   if (a.part == "forced" && a.which_case.empty()) throw std::runtime_error("--part forced needs --case");
   if (a.part == "piston" && (a.scene.empty() || a.resolutions.empty()))
