@@ -90,6 +90,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   porosity_ = f.porosity;
   plasticity_ = f.plasticity;
   body_force_ = f.body_force;
+  wall_extrapolation_ = f.wall_extrapolation;
   for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
   xsph_epsilon_ = Real(scene.simulation.xsph);
 }
@@ -243,6 +244,19 @@ void HydroCpu<D>::plastic_return(bool accumulate) {
   for (std::size_t a = 0; a < n; ++a) plastic_return_particle<D>(c, static_cast<std::uint32_t>(a), accumulate);
 }
 
+// Extrapolated walls: p, S, rho, c_s of the wall particles from the free
+// particles' state of this evaluation (after their EOS and plastic return).
+template <int D>
+void HydroCpu<D>::wall_extrapolation() {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::uint32_t ia = static_cast<std::uint32_t>(a);
+    wall_extrapolation_particle<D>(c, ia, ListNeighbors{nbrs_, ia});
+  }
+}
+
 template <int D>
 void HydroCpu<D>::body_force() {
   const std::size_t n = ps_.n;
@@ -294,6 +308,7 @@ void HydroCpu<D>::evaluate() {
   else h_from_continuity_density();
   equation_of_state();
   if (plasticity_) plastic_return(false);
+  if (wall_extrapolation_) wall_extrapolation();
   if (solid_) solid_rates();  // the feature set is fixed for the run
   else rates();
   if (gravity_.enabled()) self_gravity();

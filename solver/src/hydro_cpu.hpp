@@ -61,6 +61,7 @@ class HydroCpu {
   void self_gravity();
   void xsph_velocity();  // XSPH correction to dx/dt (when simulation.xsph > 0)
   void plastic_return(bool accumulate);  // yield: S back onto the surface
+  void wall_extrapolation();  // extrapolated walls: state from the free particles
   void body_force();      // simulation.gravity
 
   ParticleStore<D>& ps_;
@@ -81,7 +82,7 @@ class HydroCpu {
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
-  bool porosity_ = false, plasticity_ = false, body_force_ = false;
+  bool porosity_ = false, plasticity_ = false, body_force_ = false, wall_extrapolation_ = false;
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;
 };

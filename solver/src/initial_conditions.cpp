@@ -183,7 +183,10 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
       if (!ps.wall_normal.empty() && b.wall_free_slip)
         for (int k = 0; k < D; ++k) ps.wall_normal[next][k] = Real(b.wall_normal[k]);
       if (!ps.boundary.empty())
-        ps.boundary[next] = b.boundary == BoundaryKind::None ? 0 : b.boundary_evolving ? 2 : 1;
+        ps.boundary[next] = b.boundary == BoundaryKind::None                   ? kFreeParticle
+                            : b.boundary_state == BoundaryState::Evolving     ? kBoundaryEvolving
+                            : b.boundary_state == BoundaryState::Extrapolated ? kBoundaryExtrapolated
+                                                                              : kBoundaryFrozen;
       for (int k = 0; k < D; ++k)
         if (!std::isfinite(ps.x[next][k]) || !std::isfinite(ps.v[next][k]))
           throw InputError(scene.file, key, "initial position or velocity is not finite");

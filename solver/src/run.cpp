@@ -252,8 +252,9 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   for (const MaterialConfig& m : scene.materials) {
     needs.porosity = needs.porosity || m.porosity.enabled;
     needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;
-    needs.dilatancy = needs.dilatancy ||
-                      (m.plasticity.model == PlasticityType::DruckerPrager && m.plasticity.dilatancy_angle > 0);
+    // every Drucker-Prager material stores eps_v: its tension-cracking
+    // opening persists (and so does dilatant flow, psi > 0)
+    needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
   }
   ParticleStore<D> ps;
   generate_bodies<D>(scene, hfact, needs, ps);

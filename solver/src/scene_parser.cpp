@@ -938,7 +938,10 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
     if (b.boundary == BoundaryKind::None)
       fail(p + ".boundary_state", "only a boundary body (boundary = \"fixed\" or \"moving\") has a boundary_state",
            t.get("boundary_state"));
-    b.boundary_evolving = choice(t, "boundary_state", p, false, {{"frozen", false}, {"evolving", true}});
+    b.boundary_state = choice(t, "boundary_state", p, BoundaryState::Frozen,
+                              {{"frozen", BoundaryState::Frozen},
+                               {"evolving", BoundaryState::Evolving},
+                               {"extrapolated", BoundaryState::Extrapolated}});
   }
   // Walls (issue #12): no-slip (the default: the wall's velocity enters the
   // velocity gradient and the viscosity like any neighbour's) or free-slip

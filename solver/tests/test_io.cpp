@@ -76,7 +76,7 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.boundary = true;  // boundary flags
   needs.porosity = true;    // alpha (a snapshot field) and dalphadt
   needs.plasticity = true;  // eps_p (a snapshot field)
-  needs.dilatancy = true;   // eps_v (a snapshot field)
+  needs.inelastic_volume = true;  // eps_v (a snapshot field)
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {

@@ -144,7 +144,7 @@ TEST(SolidRun, EvolvingBoundaryStateChangesDensityButNotMotion) {
   for (const bool evolving : {false, true}) {
     const std::string body = evolving ? lid + "boundary_state = \"evolving\"\n" : lid;
     const Scene s = parse_scene(block_scene("shear_modulus = 0.22", body), "t.toml");
-    EXPECT_EQ(s.bodies[1].boundary_evolving, evolving);
+    EXPECT_EQ(s.bodies[1].boundary_state, evolving ? BoundaryState::Evolving : BoundaryState::Frozen);
     const FinalState fs = run_scene(s, RunOptions{"", false, false, true});
     int lid_particles = 0, changed = 0;
     for (std::size_t i = 0; i < fs.m.size(); ++i) {

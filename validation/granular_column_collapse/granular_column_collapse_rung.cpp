@@ -543,9 +543,9 @@ Json common_parameters(const rubble::Scene& base, const Args& args) {
                        {"g", -base.simulation.gravity[1]},
                        {"hfact", base.simulation.hfact},
                        {"integrator", base.simulation.integrator == rubble::Integrator::Leapfrog ? "leapfrog" : "rk2_adaptive"},
-                       {"floor_evolving", base.bodies[1].boundary_evolving},
+                       {"floor_state", rubble::boundary_state_name(base.bodies[1].boundary_state)},
                        {"floor_free_slip", base.bodies[1].wall_free_slip},
-                       {"wall_evolving", base.bodies[2].boundary_evolving},
+                       {"wall_state", rubble::boundary_state_name(base.bodies[2].boundary_state)},
                        {"wall_free_slip", base.bodies[2].wall_free_slip},
                        {"eps_threshold", kEpsThreshold},
                        {"report_only", args.report_only}});

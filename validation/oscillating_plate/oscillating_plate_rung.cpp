@@ -448,7 +448,7 @@ int run(const Args& args) {
                                      {"hfact", base.simulation.hfact},
                                      {"kernel_correction", base.simulation.kernel_correction},
                                      {"xsph", base.simulation.xsph},
-                                     {"clamp_state_evolving", base.bodies[1].boundary_evolving},
+                                     {"clamp_state_evolving", base.bodies[1].boundary_state == rubble::BoundaryState::Evolving},
                                      {"end_time", base.simulation.end_time},
                                      {"report_only", args.report_only}})},
         {"units", Json::object({{"period", "s"}})},

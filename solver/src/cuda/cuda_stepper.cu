@@ -428,7 +428,7 @@ struct CudaStepper<D>::Impl {
   KernelType kernel;
   Real hfact, courant, force_factor, xsph_epsilon;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
-  bool porosity = false, plasticity = false, body_force = false;
+  bool porosity = false, plasticity = false, body_force = false, wall_extrapolation = false;
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
   GravityConfig gravity;
   DeviceArray<Mat<D>> art_R;
@@ -470,6 +470,7 @@ struct CudaStepper<D>::Impl {
     kernel_correction = f.kernel_correction;
     porosity = f.porosity;
     plasticity = f.plasticity;
+    wall_extrapolation = f.wall_extrapolation;
     body_force = f.body_force;
     for (int k = 0; k < D; ++k) g[k] = Real(scene.simulation.gravity[k]);
     materials.resize(materials_host.size());
@@ -634,6 +635,12 @@ struct CudaStepper<D>::Impl {
     if (plasticity)
       for_each_index("plastic return", count,
                      [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), false); });
+    if (wall_extrapolation)
+      for_each_index("wall extrapolation", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        wall_extrapolation_particle<D>(c, std::uint32_t(i), each);
+      });
     if (solid) {
       int* flag = flags.data();
       for_each_index("solid velocity gradient", count, [=] __device__(std::size_t i) {

@@ -23,6 +23,7 @@
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/solid.hpp"
 #include "rubble/physics/timestep.hpp"
+#include "rubble/physics/wall_extrapolation.hpp"
 #include "rubble/physics/xsph.hpp"
 
 namespace rubble {
@@ -65,6 +66,40 @@ RUBBLE_HD_INLINE Vec<D> seen_velocity(const StoreView<D>& s, std::uint32_t a, st
   if (!s.wall_normal || !s.boundary[b]) return s.v[b];
   const Vec<D> n = s.wall_normal[b];
   return s.v[a] - dot(s.v[a] - s.v[b], n) * n;
+}
+
+// Whether particle a's state (rho, u, S, alpha, plastic strain) follows
+// the material's evolution equations: free particles and evolving boundary
+// particles; frozen and extrapolated boundary particles do not.
+template <int D>
+RUBBLE_HD_INLINE bool state_evolves(const StoreView<D>& s, std::uint32_t a) {
+  return !s.boundary || s.boundary[a] == kFreeParticle || s.boundary[a] == kBoundaryEvolving;
+}
+
+// Extrapolated wall particle a (kBoundaryExtrapolated): p, S, rho and c_s
+// from its free neighbours (physics/wall_extrapolation.hpp), with the body
+// force as the wall's hydrostatic gradient (self-gravity is not included).
+// Free and other boundary particles are left alone, so it may run over all
+// particles at once: it reads only free particles and writes only walls.
+// A wall particle without free neighbours keeps its last state.
+template <int D, class Each>
+RUBBLE_HD_INLINE void wall_extrapolation_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  if (!s.boundary || s.boundary[a] != kBoundaryExtrapolated) return;
+  WallSums<D> sum;
+  each([&](std::uint32_t b) {
+    if (s.boundary[b] != kFreeParticle) return;
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real w = kernel_w<D>(c.kernel, norm(dx), s.h[a]);
+    if (w <= Real(0)) return;
+    wall_sums_add<D>(sum, w, dx, s.p[b], s.rho[b], s.cs[b], s.S ? s.S[b] : Mat<D>::zero());
+  });
+  if (sum.w <= Real(0)) return;
+  const WallState st = wall_state<D>(sum, c.body_force);
+  s.p[a] = st.p;
+  s.rho[a] = st.rho;
+  s.cs[a] = st.cs;
+  if (s.S) s.S[a] = wall_deviator<D>(sum);
 }
 
 // ---- density -------------------------------------------------------------
@@ -124,8 +159,9 @@ RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint3
 // porous material p = p_s(alpha rho, u)/alpha (physics/porosity.hpp).
 template <int D>
 RUBBLE_HD_INLINE void eos_particle(const RhsContext<D>& c, std::uint32_t a) {
+  if (c.s.boundary && c.s.boundary[a] == kBoundaryExtrapolated) return;  // p, c_s from wall_extrapolation_particle
   const MaterialParams& mat = c.mat[c.s.material_id[a]];
-  // dilatant plastic flow: the EOS sees the elastic density rho exp(eps_v)
+  // inelastic volume change (cracking, dilatancy): the EOS sees the elastic density rho exp(eps_v)
   const Real rho = c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
   Real p, c2;
   if (mat.porosity.enabled) {
@@ -161,8 +197,7 @@ template <int D>
 RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32_t a, Real drhodt, Real dudt) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  const bool frozen = s.boundary && s.boundary[a] == 1;
-  return (mat.porosity.enabled && !frozen)
+  return (mat.porosity.enabled && state_evolves<D>(s, a))
              ? porosity_dalpha_dt(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a], drhodt, dudt)
              : Real(0);
 }
@@ -172,19 +207,24 @@ RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32
 // pressure of the last eos_particle. With `accumulate` (once per accepted
 // step, at its end) the equivalent plastic strain grows by the return's
 // increment; the returns inside an evaluation (stage states the integrator
-// discards) only keep the stress on the surface. Tension beyond the
-// Drucker-Prager apex is capped at the apex pressure for this evaluation
-// (the EOS has no memory of it: the next evaluation starts again from p(rho, u),
-// so a granular material that opened in tension closes again without
-// pressure). The dilatant part of the flow (psi > 0) does persist: at the
-// end of each step eps_v grows by the return's deps_v, and the EOS then
-// sees the elastic density rho exp(eps_v), whose pressure is the returned
-// p + K deps_v to first order.
+// discards) only keep the stress on the surface.
+//
+// The inelastic volume change persists (Drucker-Prager materials store
+// eps_v): at the end of each step eps_v grows by the return's deps_v
+// (dilatant flow, psi > 0) and deps_crack (the opening of tension cracking,
+// (p_apex - p_trial)/K), and the EOS then sees the elastic density
+// rho exp(eps_v), whose pressure is the returned p to first order. So a
+// granular material that opened in tension sits at the apex and is
+// compressed again as soon as it closes, as in Bui et al. 2008, whose
+// stress-rate form resets the stress to the apex (the mean stress has no
+// memory of the opening). Without it, a dilated particle has p(rho) below
+// the apex until its density recovers: a layer of stress-free particles
+// that do not repel each other (clumping at a granular flow's front).
 template <int D>
 RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint32_t a, bool accumulate) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  if (mat.plasticity.model == PlasticityModel::None || (s.boundary && s.boundary[a] == 1)) return;
+  if (mat.plasticity.model == PlasticityModel::None || !state_evolves<D>(s, a)) return;
   const Real f = deviatoric_factor_particle<D>(c, a);
   const Real K = s.rho[a] * s.cs[a] * s.cs[a];
   const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], s.p[a], f * mat.shear_modulus, K);
@@ -192,7 +232,7 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   s.p[a] = r.p;
   if (accumulate) {
     s.eps_p[a] += r.deps_p;
-    if (s.eps_v) s.eps_v[a] += r.deps_v;
+    if (s.eps_v) s.eps_v[a] += r.deps_v + r.deps_crack;
   }
 }
 
@@ -210,7 +250,7 @@ template <int D>
 RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::uint32_t a, const Real* alpha_start) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  if (!mat.porosity.enabled || (s.boundary && s.boundary[a] == 1)) return;
+  if (!mat.porosity.enabled || !state_evolves<D>(s, a)) return;
   s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], alpha_start[a]);
 }
 
@@ -323,14 +363,14 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
 // ---- after the pair sums -------------------------------------------------
 
 // Boundary particles move as prescribed: dv/dt = 0, so they keep their
-// velocity (0 when fixed) and move with it. Frozen ones (flag 1) keep their
-// state too; evolving ones (flag 2) integrate rho, u and S like the rest.
+// velocity (0 when fixed) and move with it. Evolving ones integrate rho, u
+// and S like the rest; frozen and extrapolated ones are not integrated.
 template <int D>
 RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
-  if (!s.boundary[a]) return;
+  if (s.boundary[a] == kFreeParticle) return;
   s.dvdt[a] = Vec<D>::zero();
-  if (s.boundary[a] == 2) return;
+  if (s.boundary[a] == kBoundaryEvolving) return;
   s.dudt[a] = 0;
   if (s.drhodt) s.drhodt[a] = 0;
   if (s.dSdt) s.dSdt[a] = Mat<D>::zero();

@@ -18,6 +18,7 @@ struct RhsFeatures {
   bool porosity = false;           // a material is porous: d alpha/dt with the rates, end-of-step envelope return
   bool plasticity = false;         // a solid material yields: return mapping in each evaluation and step
   bool body_force = false;         // simulation.gravity is not zero
+  bool wall_extrapolation = false; // a boundary body has boundary_state = "extrapolated"
 };
 
 // Throws RunError when the store lacks a field the features need.
@@ -31,6 +32,9 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
   }
   for (int k = 0; k < D; ++k) f.body_force = f.body_force || scene.simulation.gravity[k] != 0;
+  for (const BodyConfig& b : scene.bodies)
+    f.wall_extrapolation = f.wall_extrapolation ||
+                           (b.boundary != BoundaryKind::None && b.boundary_state == BoundaryState::Extrapolated);
   if (f.porosity && (ps.alpha.size() != ps.n || ps.dalphadt.size() != ps.n))
     throw RunError("porous materials need the alpha and dalphadt fields allocated");
   if (f.plasticity && (!f.solid || ps.eps_p.size() != ps.n))

@@ -33,7 +33,7 @@ struct FieldNeeds {
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
   bool free_slip = false;           // a wall is free-slip: wall_normal is stored
-  bool dilatancy = false;           // a Drucker-Prager material dilates (psi > 0): eps_v is stored
+  bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
 };
 
 template <int D>
@@ -70,9 +70,8 @@ struct ParticleStore {
   std::vector<Mat<D>> S;     // deviatoric stress [Pa] (evolved; symmetric, in-plane block in 2-D)
   std::vector<Mat<D>> dSdt;  // [Pa/s]
 
-  // boundary particles (allocated only when a body is a boundary): 0 = free,
-  // 1 = fixed or moving with its body's prescribed velocity, state frozen
-  // (not integrated); 2 = the same motion, state (rho, u, S) evolving
+  // boundary particles (allocated only when a body is a boundary): one of
+  // the flags below (kFreeParticle ... kBoundaryExtrapolated)
   std::vector<std::int32_t> boundary;
 
   // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
@@ -88,8 +87,9 @@ struct ParticleStore {
   // the accumulated equivalent plastic strain (physics/plasticity.hpp),
   // updated by the return mapping at the end of each step
   std::vector<Real> eps_p;  // [1]
-  // dilatant plastic flow (allocated only when a material has psi > 0): the
-  // accumulated plastic volumetric strain; the EOS sees the elastic density
+  // Drucker-Prager materials (allocated only when one is in the scene): the
+  // accumulated inelastic volumetric strain, the opening of tension cracking
+  // plus dilatant plastic flow (psi > 0); the EOS sees the elastic density
   // rho exp(eps_v) (physics.md, "Plasticity")
   std::vector<Real> eps_v;  // [1]
 
@@ -200,7 +200,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
     dalphadt.assign(n, 0);
   }
   if (needs.plasticity) eps_p.assign(n, 0);
-  if (needs.dilatancy) eps_v.assign(n, 0);
+  if (needs.inelastic_volume) eps_v.assign(n, 0);
   if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
 }
 

@@ -16,6 +16,17 @@
 
 namespace rubble {
 
+// Values of the `boundary` field. A boundary particle is fixed or moves with
+// its body's prescribed velocity; its state is
+//   kBoundaryFrozen:       kept (not integrated);
+//   kBoundaryEvolving:     integrated like a free particle's (rho, u, S);
+//   kBoundaryExtrapolated: set in every evaluation from the free particles
+//                          around it (physics/wall_extrapolation.hpp).
+constexpr std::int32_t kFreeParticle = 0;
+constexpr std::int32_t kBoundaryFrozen = 1;
+constexpr std::int32_t kBoundaryEvolving = 2;
+constexpr std::int32_t kBoundaryExtrapolated = 3;
+
 template <int D>
 struct StoreView {
   std::size_t n = 0;

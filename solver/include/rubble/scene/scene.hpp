@@ -149,6 +149,11 @@ enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
 // others with their own state. Fixed: at rest; moving: with the body's
 // velocity, for ever.
 enum class BoundaryKind : int { None = 0, Fixed = 1, Moving = 2 };
+// What a boundary body's particles do with their state (BodyConfig::boundary_state).
+enum class BoundaryState : int { Frozen = 0, Evolving = 1, Extrapolated = 2 };
+inline const char* boundary_state_name(BoundaryState s) {
+  return s == BoundaryState::Evolving ? "evolving" : s == BoundaryState::Extrapolated ? "extrapolated" : "frozen";
+}
 
 struct BodyConfig {
   BodyShape shape = BodyShape::Box;
@@ -162,11 +167,15 @@ struct BodyConfig {
   double internal_energy = -1;  // [J/kg]
   std::array<double, 3> velocity{};  // [m/s]
   BoundaryKind boundary = BoundaryKind::None;
-  // boundary_state = "evolving": the boundary particles' density, internal
-  // energy and stress evolve like any particle's, only their motion is
-  // prescribed (dynamic boundary particles, Crespo et al. 2007; a clamp
-  // that carries stress). "frozen" (default): they keep their initial state.
-  bool boundary_evolving = false;
+  // boundary_state: "frozen" (default): the boundary particles keep their
+  // initial state. "evolving": their density, internal energy and stress
+  // evolve like any particle's, only their motion is prescribed (dynamic
+  // boundary particles, Crespo et al. 2007; a clamp that carries stress).
+  // "extrapolated": p, S, rho and c_s are set in every evaluation from the
+  // free particles around them (Adami, Hu & Adams 2012;
+  // physics/wall_extrapolation.hpp); walls and floors that hold granular
+  // material or a fluid.
+  BoundaryState boundary_state = BoundaryState::Frozen;
   // Walls (boundary bodies): wall_slip = "free_slip" makes the wall
   // frictionless: its particles' relative velocity to a neighbour counts
   // only along wall_normal (unit, pointing into the material). Default no-slip.
