@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -127,6 +128,9 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
                        "the body holds no particle: spacing is larger than the box");
     total += body_points.back().size();
   }
+  if (total > std::size_t(std::numeric_limits<std::int32_t>::max()))
+    throw InputError(scene.file, "bodies", "the bodies hold " + std::to_string(total) +
+                                               " particles, more than a 32-bit particle id can number");
   ps.allocate(total, needs);
 
   std::size_t next = 0;
@@ -153,6 +157,7 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
         for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
         ps.m[next] = Real(m);
         ps.material_id[next] = b.material_id;
+        ps.id[next] = static_cast<std::int32_t>(next);
         ps.rho[next] = Real(rho);
         ps.u[next] = Real(u);
         ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(std::max(rho, 0.05 * model.rho_c)));
@@ -176,6 +181,7 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
       for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
       ps.m[next] = Real(m);
       ps.material_id[next] = b.material_id;
+      ps.id[next] = static_cast<std::int32_t>(next);
       ps.rho[next] = Real(b.density);
       ps.u[next] = Real(u);
       ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));

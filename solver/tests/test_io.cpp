@@ -226,7 +226,7 @@ TYPED_TEST(SnapshotTest, FileLayoutAndAttributes) {
       EXPECT_EQ(dims[2], hsize_t(D)) << name;
     }
     const hid_t type = H5Dget_type(dset);
-    if (name == "material_id" || name == "boundary") {
+    if (name == "material_id" || name == "id" || name == "boundary") {
       EXPECT_GT(H5Tequal(type, H5T_NATIVE_INT32), 0);
     } else {
       EXPECT_EQ(H5Tget_size(type), sizeof(Real)) << name;
@@ -257,7 +257,7 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ParticleStore<D> back;
   SnapshotMeta meta;
   read_snapshot(path, back, meta);
-  EXPECT_EQ(back.allocated_fields(), (std::vector<std::string>{"x", "v", "m", "rho", "u", "material_id"}));
+  EXPECT_EQ(back.allocated_fields(), (std::vector<std::string>{"x", "v", "m", "rho", "u", "material_id", "id"}));
   std::vector<std::string> listed;
   for (const auto& [name, comps] : snapshot_fields(ps)) {
     listed.push_back(name);

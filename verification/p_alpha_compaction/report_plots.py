@@ -9,6 +9,9 @@ piston_* cases (planar compaction, Jutzi et al. 2008 §5.1): rho, p, alpha, v
 against x for the finest resolution with the analytic two-wave solution,
 the measured and analytic front positions marked, and the L1 errors against
 resolution beside Spheral's regression values at N = 500.
+
+impact* cases (2-D impact into porous basalt): alpha(p) of the porous
+particles over the crush curve and the compacted zone.
 """
 from pathlib import Path
 
@@ -130,7 +133,41 @@ def _piston(case, records, out_dir):
     return images
 
 
+def _impact(case, records, out_dir):
+    """The 2-D impact into porous basalt: (p, alpha) of every porous particle
+    at the last output over the crush curve, and the alpha field near the
+    impact point (the compacted zone)."""
+    rec = _finest(records, "impact")
+    if rec is None:
+        return []
+    im, par = rec["impact"], rec.get("parameters", {})
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), constrained_layout=True)
+    ax = axes[0]
+    ax.plot(np.asarray(im["crush_p"]) / 1e9, im["crush_alpha"], "k-", lw=1.2, label="crush curve α_c(p)")
+    ax.scatter(np.asarray(im["p"]) / 1e9, im["alpha"], s=2, c="C0", alpha=0.5, label="porous particles")
+    ax.set_xlabel("p [GPa]")
+    ax.set_ylabel("α")
+    ax.set_xlim(min(-0.1, float(np.min(im["p"])) / 1e9), 1.2 * par.get("p_s", 2e9) / 1e9)
+    ax.legend(fontsize=8)
+    ax.set_title(f"on or below the crush curve at t = {par.get('t_end', 0) * 1e6:.3g} µs")
+    ax = axes[1]
+    sc = ax.scatter(np.asarray(im["map_x"]) * 1e3, np.asarray(im["map_y"]) * 1e3, c=im["map_alpha"], s=3,
+                    cmap="viridis", vmin=1.0, vmax=par.get("alpha0", 1.25))
+    fig.colorbar(sc, ax=ax, label="α")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title(f"compacted zone, {par.get('impact_speed', 0) / 1e3:.3g} km/s basalt disc "
+                 f"(R = {par.get('projectile_radius', 0) * 1e3:.3g} mm)")
+    name = f"p_alpha_compaction-{case}-impact.png"
+    fig.savefig(Path(out_dir) / name, dpi=110)
+    plt.close(fig)
+    return [(f"porous impact: α(p) over the crush curve and the compacted zone ({case})", name)]
+
+
 def plots(case, records, out_dir):
     if case.startswith("forced_"):
         return _forced(case, records, out_dir)
+    if case.startswith("impact"):
+        return _impact(case, records, out_dir)
     return _piston(case, records, out_dir)

@@ -55,7 +55,7 @@ struct FinalState {
   std::vector<double> alpha;  // porous runs: the distention (empty otherwise)
   std::vector<double> eps_p;  // runs with plasticity: accumulated plastic strain (empty otherwise)
   std::vector<int> material_id;
-  std::vector<int> boundary;  // runs with boundary particles: 0 free, 1 frozen, 2 evolving (empty otherwise)
+  std::vector<int> boundary;  // runs with boundary particles: the kFreeParticle ... kBoundaryExtrapolated flags (empty otherwise)
   // Kernel-gradient correction (solids, simulation.kernel_correction):
   // particle evaluations where the correction matrix was ill-conditioned and
   // the identity was used, out of all particle evaluations of the run.

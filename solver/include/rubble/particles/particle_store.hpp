@@ -43,6 +43,7 @@ struct ParticleStore {
   // constants of each particle
   std::vector<Real> m;                    // mass [kg]
   std::vector<std::int32_t> material_id;  // index into the scene's materials
+  std::vector<std::int32_t> id;           // the particle's index when generated: follows it through every sort
 
   // evolved state
   std::vector<Vec<D>> x;  // position [m]
@@ -144,6 +145,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"h", &PS::h, "m", FieldRole::Evolved, true},
       {"cs", &PS::cs, "m/s", FieldRole::Derived, true},
       {"material_id", &PS::material_id, "1", FieldRole::Constant, true},
+      {"id", &PS::id, "1", FieldRole::Constant, true},
       {"omega", &PS::omega, "1", FieldRole::Derived, false},
       {"dvdt", &PS::dvdt, "m/s^2", FieldRole::Rate, false},
       {"dudt", &PS::dudt, "J/kg/s", FieldRole::Rate, false},
@@ -171,6 +173,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   n = count;
   m.assign(n, 0);
   material_id.assign(n, 0);
+  id.assign(n, 0);
   x.assign(n, Vec<D>::zero());
   v.assign(n, Vec<D>::zero());
   u.assign(n, 0);
