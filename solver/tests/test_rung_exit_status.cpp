@@ -1,0 +1,31 @@
+// The ladder's gate (verification/common/record.hpp: rung_exit_status): a
+// failing check fails its rung unless a documented known failure names it;
+// a known-failure entry whose matching checks all pass fails the rung too,
+// so that stale entries are removed and the check gates again.
+#include <gtest/gtest.h>
+
+#include "../../verification/common/record.hpp"
+
+using rubble::verification::Check;
+using rubble::verification::rung_exit_status;
+
+namespace {
+Check check(const std::string& name, double value) { return Check{name, value, 1.0, "<=", "test"}; }
+}  // namespace
+
+TEST(RungExitStatus, FailingChecksGateUnlessKnown) {
+  EXPECT_EQ(rung_exit_status({check("a", 0.5), check("b", 0.5)}, {}), 0);
+  EXPECT_EQ(rung_exit_status({check("a", 0.5), check("b", 2.0)}, {}), 1);
+  EXPECT_EQ(rung_exit_status({check("a", 0.5), check("clumping at n = 25", 2.0)}, {"clumping"}), 0);
+}
+
+TEST(RungExitStatus, AKnownFailureStillFailingSomewhereIsNotStale) {
+  // the same check at three resolutions: one passes, two fail
+  EXPECT_EQ(rung_exit_status({check("clumping", 2.0), check("clumping", 0.5), check("clumping", 3.0)}, {"clumping"}), 0);
+}
+
+TEST(RungExitStatus, AKnownFailureThatPassesEverywhereIsStale) {
+  EXPECT_EQ(rung_exit_status({check("clumping", 0.5), check("clumping", 0.7)}, {"clumping"}), 1);
+  // an entry that matches no check at all (a part not run) is not judged
+  EXPECT_EQ(rung_exit_status({check("a", 0.5)}, {"clumping"}), 0);
+}
