@@ -93,6 +93,8 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   wall_extrapolation_ = f.wall_extrapolation;
   for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
   xsph_epsilon_ = Real(scene.simulation.xsph);
+  shifting_ = Real(scene.simulation.shifting);
+  if (shifting_ > Real(0)) shift_.assign(ps_.n, Vec<D>::zero());
 }
 
 template <int D>
@@ -266,19 +268,41 @@ void HydroCpu<D>::body_force() {
 }
 
 template <int D>
-void HydroCpu<D>::end_step(const Real* alpha_start) {
+void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
   if (porosity_) {
 #pragma omp parallel for if (n > 4096)
     for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a), alpha_start);
   }
-  if (!plasticity_ && !porosity_) return;
-  // The pressure of the final state: the plastic return works at fixed p,
-  // and the stored p, c_s of a leapfrog step then belong to the state it
-  // returns (snapshots, the next step limit), not to its predicted state.
-  equation_of_state();
-  if (plasticity_) plastic_return(true);
+  if (plasticity_ || porosity_) {
+    // The pressure of the final state: the plastic return works at fixed p,
+    // and the stored p, c_s of a leapfrog step then belong to the state it
+    // returns (snapshots, the next step limit), not to its predicted state.
+    equation_of_state();
+    if (plasticity_) plastic_return(true);
+  }
+  if (shifting_ > Real(0)) shift_particles(dt);
+}
+
+// Particle shifting (physics/particle_shifting.hpp) with the neighbour
+// lists of the last evaluation: exact for leapfrog, whose last evaluation
+// is at the final positions; for rk2_adaptive the final positions differ by
+// the step's last correction, and a pair that has just entered the support
+// is missed (its kernel terms vanish at the support's edge).
+template <int D>
+void HydroCpu<D>::shift_particles(Real dt) {
+  const std::size_t n = ps_.n;
+  const RhsContext<D> c = context();
+  Vec<D>* out = shift_.data();
+  const Real A = shifting_;
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::uint32_t ia = static_cast<std::uint32_t>(a);
+    shifting_particle<D>(c, ia, A, dt, out, ListNeighbors{nbrs_, ia});
+  }
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) ps_.x[a] = domain_.wrap(ps_.x[a] + out[a]);
 }
 
 template <int D>

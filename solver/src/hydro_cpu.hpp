@@ -32,7 +32,7 @@ class HydroCpu {
   // the loading envelope, and the plastic return mapping (with plastic-strain
   // accumulation) at the step's final state. Nothing when neither is used.
   // alpha_start: the distention at the start of the step (porous runs).
-  void end_step(const Real* alpha_start);
+  void end_step(const Real* alpha_start, Real dt);
   // Largest stable time step at the last evaluated state (Courant and force limits).
   Real dt_limit();
 
@@ -61,6 +61,7 @@ class HydroCpu {
   void self_gravity();
   void xsph_velocity();  // XSPH correction to dx/dt (when simulation.xsph > 0)
   void plastic_return(bool accumulate);  // yield: S back onto the surface
+  void shift_particles(Real dt);  // particle shifting after an accepted step
   void wall_extrapolation();  // extrapolated walls: state from the free particles
   void body_force();      // simulation.gravity
 
@@ -82,6 +83,8 @@ class HydroCpu {
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
+  Real shifting_ = 0;       // particle shifting coefficient A (0 = off)
+  std::vector<Vec<D>> shift_;  // particle shifting: this step's shifts (scratch)
   bool porosity_ = false, plasticity_ = false, body_force_ = false, wall_extrapolation_ = false;
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;

@@ -368,7 +368,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
               "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
-              "kernel_correction", "xsph", "gravity"});
+              "kernel_correction", "xsph", "shifting", "gravity"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -433,6 +433,11 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (auto x = number(*t, "xsph", p)) {
     require(*x >= 0 && *x <= 1, *t, "xsph", p, *x, "in [0, 1] (0 = off; Monaghan 1989 uses 0.5)");
     s.xsph = *x;
+  }
+  if (auto x = number(*t, "shifting", p)) {
+    require(*x >= 0 && *x <= 10, *t, "shifting", p, *x,
+            "in [0, 10] (0 = off; Skillen et al. 2013 use 1-6 for the coefficient A of A h |v| dt)");
+    s.shifting = *x;
   }
   // A uniform external acceleration (issue #12): D numbers, m/s^2.
   if (auto g = vector(*t, "gravity", p)) s.gravity = *g;

@@ -21,7 +21,7 @@ struct Oscillators {
   Box<1> box;
   int evaluations = 0;
   const Box<1>& domain() const { return box; }
-  void end_step(const Real*) {}  // no porosity or plasticity here
+  void end_step(const Real*, Real) {}  // no porosity or plasticity here
   void evaluate() {
     ++evaluations;
     for (std::size_t i = 0; i < ps.n; ++i) {

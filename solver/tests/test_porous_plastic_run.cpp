@@ -453,3 +453,21 @@ TEST(WallRun, ExtrapolatedTankHoldsAHydrostaticColumn) {
   EXPECT_LT(err_free, 0.05);
   EXPECT_LT(err_wall, 0.05);
 }
+
+// simulation.shifting (particle shifting, physics/particle_shifting.hpp):
+// default off, validated, and a body at rest is never shifted.
+TEST(ShiftingScene, KeyIsValidatedAndABodyAtRestStaysPut) {
+  EXPECT_EQ(parse_scene(rubber_block(""), "t.toml").simulation.shifting, 0.0);
+  EXPECT_EQ(parse_scene(rubber_block("", "shifting = 1.0"), "t.toml").simulation.shifting, 1.0);
+  EXPECT_NE(parse_error(rubber_block("", "shifting = -1.0")).find("simulation.shifting"), std::string::npos);
+  EXPECT_NE(parse_error(rubber_block("", "shifting = 20.0")).find("simulation.shifting"), std::string::npos);
+  TempDir d("shift_rest");
+  const auto snaps =
+      run_snapshots<2>(parse_scene(rubber_block("shear_modulus = 0.22", "shifting = 2.0"), "t.toml"), d);
+  std::vector<double> first, last;
+  for (const auto* ps : {&snaps.front(), &snaps.back()})
+    for (std::size_t i = 0; i < ps->n; ++i) (ps == &snaps.front() ? first : last).push_back(ps->x[i][0] + 7 * ps->x[i][1]);
+  std::sort(first.begin(), first.end());
+  std::sort(last.begin(), last.end());
+  EXPECT_EQ(first, last);
+}

@@ -2,8 +2,9 @@
 // Adami, Hu & Adams 2012, eq. 27): for a body at rest under a uniform body
 // force g the pressure is hydrostatic, p(x) = p0 + rho g.(x - x0), a linear
 // field, and the formula gives the wall particle exactly that pressure
-// whatever the neighbours' positions and weights (the Shepard average of a
-// linear field plus the gradient term times the weighted offset is exact).
+// whatever the neighbours' positions and weights, for a wall particle below
+// them along g (the Shepard average of a linear field plus the gradient term
+// times the weighted offset is exact).
 // Constant fields (S, rho, c) come back unchanged.
 #include <gtest/gtest.h>
 
@@ -39,6 +40,7 @@ void check_hydrostatic(unsigned seed) {
     for (int f = 0; f < 40; ++f) {
       Vec<D> xf;
       for (int k = 0; k < D; ++k) xf[k] = xw[k] + Real(h * u(rng));
+      if (dot(g, xw - xf) < 0) xf = xw - (xf - xw);  // above the wall particle along g (a floor)
       const Vec<D> dx = xw - xf;
       const Real w = kernel_w<D>(KernelType::CubicSpline, norm(dx), h);
       if (w <= 0) continue;
@@ -57,6 +59,17 @@ void check_hydrostatic(unsigned seed) {
 }
 
 }  // namespace
+
+// A wall particle above its neighbours (a wall rising past the material's
+// free surface) takes their Shepard pressure: the hydrostatic field is not
+// continued into a tension that would pull the material up the wall.
+TEST(WallExtrapolation, NoTensionAboveTheMaterial) {
+  WallSums<2> sum;
+  wall_sums_add<2>(sum, Real(0.5), Vec<2>{0, 0.01}, Real(100), Real(2650), Real(16), Mat<2>::zero());
+  wall_sums_add<2>(sum, Real(0.5), Vec<2>{0.004, 0.012}, Real(100), Real(2650), Real(16), Mat<2>::zero());
+  const WallState st = wall_state<2>(sum, Vec<2>{0, -9.81});
+  EXPECT_EQ(st.p, 100);
+}
 
 TEST(WallExtrapolation, HydrostaticPressureIsExact1D) { check_hydrostatic<1>(1); }
 TEST(WallExtrapolation, HydrostaticPressureIsExact2D) { check_hydrostatic<2>(2); }

@@ -37,7 +37,7 @@ struct ForceFree {
   ParticleStore<1>& ps;
   Box<1> box;
   const Box<1>& domain() const { return box; }
-  void end_step(const Real*) {}  // no porosity or plasticity here
+  void end_step(const Real*, Real) {}  // no porosity or plasticity here
   void evaluate() {
     for (std::size_t i = 0; i < ps.n; ++i) ps.xsph_v[i][0] = 0.25 * (1.0 + double(i));
   }

@@ -542,6 +542,11 @@ Json common_parameters(const rubble::Scene& base, const Args& args) {
                        {"beta", mat.viscosity.beta},
                        {"g", -base.simulation.gravity[1]},
                        {"hfact", base.simulation.hfact},
+                       {"kernel", base.simulation.kernel == rubble::KernelType::CubicSpline ? "cubic_spline"
+                                  : base.simulation.kernel == rubble::KernelType::WendlandC2 ? "wendland_c2"
+                                  : base.simulation.kernel == rubble::KernelType::WendlandC4 ? "wendland_c4"
+                                                                                            : "wendland_c6"},
+                       {"shifting", base.simulation.shifting},
                        {"integrator", base.simulation.integrator == rubble::Integrator::Leapfrog ? "leapfrog" : "rk2_adaptive"},
                        {"floor_state", rubble::boundary_state_name(base.bodies[1].boundary_state)},
                        {"floor_free_slip", base.bodies[1].wall_free_slip},

@@ -426,7 +426,7 @@ struct CudaStepper<D>::Impl {
   DeviceStore<D> store;
   DeviceBuffer scratch;
   KernelType kernel;
-  Real hfact, courant, force_factor, xsph_epsilon;
+  Real hfact, courant, force_factor, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
   bool porosity = false, plasticity = false, body_force = false, wall_extrapolation = false;
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
@@ -439,7 +439,7 @@ struct CudaStepper<D>::Impl {
   DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
   GridNeighbors<D> grid{};
   // integrator scratch
-  DeviceArray<Vec<D>> v_half;
+  DeviceArray<Vec<D>> v_half, shift;  // shift: particle shifting
   DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
@@ -456,6 +456,7 @@ struct CudaStepper<D>::Impl {
         courant(Real(scene.simulation.courant)),
         force_factor(Real(scene.simulation.force_factor)),
         xsph_epsilon(Real(scene.simulation.xsph)),
+        shifting(Real(scene.simulation.shifting)),
         summation(scene.simulation.density == DensityForm::Summation),
         gravity(scene.gravity) {
     int devices = 0;
@@ -720,18 +721,35 @@ struct CudaStepper<D>::Impl {
   }
 
   // After the integrator's last update of a step (hydro_cpu.hpp: end_step).
-  void end_step(const Real* alpha_start) {
+  void end_step(const Real* alpha_start, Real dt) {
     const RhsContext<D> c = context();
     if (porosity)
       for_each_index("end-of-step porosity", n(), [=] __device__(std::size_t i) {
         porosity_end_step_particle<D>(c, std::uint32_t(i), alpha_start);
       });
-    if (!plasticity && !porosity) return;
-    for_each_index("end-of-step equation of state", n(),
-                   [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
-    if (!plasticity) return;
-    for_each_index("end-of-step plastic return", n(),
-                   [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), true); });
+    if (plasticity || porosity)
+      for_each_index("end-of-step equation of state", n(),
+                     [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
+    if (plasticity)
+      for_each_index("end-of-step plastic return", n(),
+                     [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), true); });
+    if (shifting > Real(0)) {
+      // with the grid of the last evaluation (hydro_cpu.cpp: shift_particles)
+      const std::size_t count = n();
+      shift.resize(count);
+      Vec<D>* out = shift.data();
+      const GridNeighbors<D> g = grid;
+      const Real A = shifting;
+      for_each_index("particle shifting", count, [=] __device__(std::size_t i) {
+        GridNeighbors<D> each = g;
+        each.a = std::uint32_t(i);
+        shifting_particle<D>(c, std::uint32_t(i), A, dt, out, each);
+      });
+      const Box<D> dom = domain;
+      const StoreView<D> s = c.s;
+      for_each_index("apply shifts", count,
+                     [=] __device__(std::size_t i) { s.x[i] = dom.wrap(s.x[i] + out[i]); });
+    }
   }
 
   double dt_limit() {
@@ -760,7 +778,7 @@ struct CudaStepper<D>::Impl {
                    [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
     evaluate();
     for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
-    end_step(s.dalphadt ? alpha_start.data() : nullptr);
+    end_step(s.dalphadt ? alpha_start.data() : nullptr, dt);
   }
 
   Rk2Result rk2(Real dt, Real tol, Real dt_min) {
@@ -793,7 +811,7 @@ struct CudaStepper<D>::Impl {
         for_each_index("rk2 final", count, [=] __device__(std::size_t i) {
           rk2_combine<D>(y, v0, v0, &v1, h2, dom, i);
         });
-        end_step(v0.alpha);
+        end_step(v0.alpha, dt);
         evaluate();  // k1 of the next step
         return {dt, dt * factor, rejections};
       }

@@ -18,6 +18,7 @@
 #include "rubble/physics/jaumann_rate.hpp"
 #include "rubble/physics/kernel_gradient_correction.hpp"
 #include "rubble/physics/kernels.hpp"
+#include "rubble/physics/particle_shifting.hpp"
 #include "rubble/physics/plasticity.hpp"
 #include "rubble/physics/porosity.hpp"
 #include "rubble/physics/smoothing_length.hpp"
@@ -393,6 +394,34 @@ RUBBLE_HD_INLINE void xsph_particle(const RhsContext<D>& c, std::uint32_t a, Eac
     });
   }
   s.xsph_v[a] = c.xsph_epsilon * sum;
+}
+
+// Particle shifting (physics/particle_shifting.hpp), once per accepted step:
+// the shift of free particle a over the step dt with coefficient A, from
+// all its neighbours (wall particles fill the kernel like any other); zero
+// for boundary particles. Written to out[a]; the driver applies it after
+// every particle's shift is known.
+template <int D, class Each>
+RUBBLE_HD_INLINE void shifting_particle(const RhsContext<D>& c, std::uint32_t a, Real A, Real dt, Vec<D>* out,
+                                        Each&& each) {
+  const StoreView<D>& s = c.s;
+  out[a] = Vec<D>::zero();
+  if (s.boundary && s.boundary[a] != kFreeParticle) return;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  const Real h = s.h[a];
+  const Real w_dp = kernel_w<D>(c.kernel, mat.dp, h);
+  ShiftSums<D> sum;
+  sum.C = s.m[a] / s.rho[a] * kernel_w<D>(c.kernel, Real(0), h);
+  Real dv_max = 0;  // the largest speed of a neighbour relative to a
+  each([&](std::uint32_t b) {
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real r = norm(dx);
+    if (r <= Real(0) || r >= h) return;
+    shift_sums_add<D>(sum, s.m[b] / s.rho[b], kernel_w<D>(c.kernel, r, h), w_dp, kernel_grad<D>(c.kernel, dx, h));
+    const Real dv = norm(s.v[b] - s.v[a]);
+    dv_max = dv > dv_max ? dv : dv_max;
+  });
+  out[a] = shifting_displacement<D>(sum, A, h, dv_max, dt, mat.dp);
 }
 
 // Largest stable step of particle a (Courant and force limits); solids use

@@ -86,7 +86,7 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   sys.evaluate();
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
-  sys.end_step(alpha_start.empty() ? nullptr : alpha_start.data());
+  sys.end_step(alpha_start.empty() ? nullptr : alpha_start.data(), dt);
 }
 
 }  // namespace rubble

@@ -133,7 +133,7 @@ Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol
       const Real h2 = Real(0.5) * dt;
 #pragma omp parallel for if (n > 4096)
       for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, h2, domain, i);
-      sys.end_step(y0.alpha.empty() ? nullptr : y0.alpha.data());
+      sys.end_step(y0.alpha.empty() ? nullptr : y0.alpha.data(), dt);
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};
     }

@@ -13,7 +13,14 @@
 // p_w is the Shepard interpolation of the neighbours' pressure plus the
 // hydrostatic increase across the distance to the wall particle, which makes
 // a body at rest under the body force g balance exactly at the wall
-// (Adami et al. 2012, sec. 2.3). rubble's boundary particles move with a
+// (Adami et al. 2012, sec. 2.3). The increase is added only when it is
+// positive (the wall particle lies below its neighbours, along g): a wall
+// that rises above the material's free surface would otherwise get the
+// linear field continued past the surface, a tension that pulls material up
+// the wall (measured: -225 Pa at the top of the back wall of the a = 4
+// granular column, whose top corner then dilated to half its density and
+// blew up). A lid pressing on a material under gravity gets the Shepard
+// pressure without the (negative) increase, an error of order rho g h. rubble's boundary particles move with a
 // prescribed constant velocity, so a_w = 0. The density is the neighbours'
 // (the pair force uses sigma_w/rho_w^2 beside sigma_f/rho_f^2), and the
 // sound speed theirs (the viscosity and the time step read it).
@@ -63,7 +70,8 @@ struct WallState {
 template <int D>
 RUBBLE_HD_INLINE WallState wall_state(const WallSums<D>& sum, const Vec<D>& g) {
   const Real inv = Real(1) / sum.w;
-  return WallState{(sum.p + dot(g, sum.rho_r)) * inv, sum.rho * inv, sum.cs * inv};
+  const Real hydrostatic = dot(g, sum.rho_r) * inv;  // > 0 for a wall particle below its neighbours
+  return WallState{sum.p * inv + (hydrostatic > Real(0) ? hydrostatic : Real(0)), sum.rho * inv, sum.cs * inv};
 }
 
 template <int D>

@@ -41,6 +41,9 @@ struct SimulationConfig {
   // XSPH (Monaghan 1989): particles drift with v + eps * (smoothed v_b - v_a);
   // eps in [0, 1], 0 = off (physics/xsph.hpp).
   double xsph = 0;
+  // Particle shifting after each accepted step (physics/particle_shifting.hpp):
+  // the coefficient A of the diffusion A h |v| dt; 0 = off.
+  double shifting = 0;
   // A uniform external acceleration g [m/s^2] (D entries; all zero = off),
   // e.g. [0, -9.81] in 2-D; its potential energy -m g.x is in conserved.csv.
   std::array<double, 3> gravity{};
