@@ -48,6 +48,9 @@ class OutputWriter {
   }
 
   bool enabled() const { return enabled_; }
+  // Whether snapshot() writes anything: the host state is fetched (on the
+  // CUDA backend, downloaded) only then.
+  bool writes_snapshots() const { return enabled_ && scene_.output.snapshots; }
   void log(const ConservedRecord& r) {
     if (enabled_) log_->append(r);
   }
@@ -127,6 +130,8 @@ class CpuStepper {
     return measure_conserved<D>(ps_, t, step, dt, g_);
   }
   const ParticleStore<D>& host() { return ps_; }  // the state, on the host
+  std::size_t size() const { return ps_.n; }
+  std::int64_t bytes_downloaded() const { return 0; }  // the state never leaves the host
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
   std::int64_t evaluations() const { return sys_.evaluations(); }
   bool solid() const { return sys_.solid(); }
@@ -150,7 +155,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
   double t = 0, next_output = std::min(out_interval, t_end);
   double dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : sys.dt_limit();
   std::int64_t step = 0;
-  out.snapshot(sys.host(), t, step);
+  if (out.writes_snapshots()) out.snapshot(sys.host(), t, step);
   if (out.enabled()) out.log(sys.conserved(t, step, 0));
 
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
@@ -177,8 +182,10 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
     // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
     if (damped) sys.damp(std::exp(-dt / sim.damping_time));
 
+    // checked where the state lives (a device reduction on the CUDA backend):
+    // the host copy is fetched only for a snapshot, a diagnostic or the end
     const std::size_t bad = sys.first_non_finite();
-    if (bad < sys.host().n) {
+    if (bad < sys.size()) {
       out.diagnostic(sys.host(), t, step);
       throw RunError("non-finite value in particle " + std::to_string(bad) + " at t = " + std::to_string(t) +
                      " (step " + std::to_string(step) + "); diagnostic snapshot written");
@@ -191,7 +198,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
     if (out.enabled()) out.log(sys.conserved(t, step, dt));
     progress.update(t, dt, step);
     if (t >= next_output * (1 - 1e-12)) {
-      out.snapshot(sys.host(), t, step);
+      if (out.writes_snapshots()) out.snapshot(sys.host(), t, step);
       next_output = std::min(next_output + out_interval, t_end);
     }
   }
@@ -200,6 +207,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
   const ParticleStore<D>& ps = sys.host();
   FinalState fs;
   fs.backend = Stepper::name;
+  fs.device_to_host_bytes = sys.bytes_downloaded();
   fs.dimension = D;
   fs.time = t;
   fs.steps = step;

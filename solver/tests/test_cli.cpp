@@ -158,12 +158,25 @@ TEST_F(Cli, MissingSceneFile) {
   EXPECT_NE(r.err.find("nothere.toml"), std::string::npos) << r.err;
 }
 
+#ifndef RUBBLE_HAVE_CUDA
+// A build without the CUDA backend refuses --backend cuda with a clear message.
 TEST_F(Cli, CudaBackendRefused) {
   write_scene("ok.toml", kValid);
   const Result r = rubble("run ok.toml --backend cuda");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("no CUDA backend"), std::string::npos) << r.err;
 }
+#else
+// A CUDA build accepts --backend cuda: the run succeeds on a host with a
+// GPU; on one without, it stops naming the missing device, never claiming
+// that the backend is absent (issue #15 item 3).
+TEST_F(Cli, CudaBackendAccepted) {
+  write_scene("ok.toml", kValid);
+  const Result r = rubble("run ok.toml --backend cuda --quiet");
+  EXPECT_EQ(r.err.find("no CUDA backend"), std::string::npos) << r.err;
+  if (r.code != 0) EXPECT_NE(r.err.find("no CUDA device"), std::string::npos) << r.err;
+}
+#endif
 
 TEST_F(Cli, RefusesNonEmptyOutputDirectory) {
   write_scene("ok.toml", kValid);

@@ -46,6 +46,9 @@ struct RunOptions {
 // Final particle state, flattened (vector fields N x D, row-major).
 struct FinalState {
   std::string backend = "cpu";  // the backend that ran it (records name it)
+  // CUDA backend: bytes copied from the device to the host over the run
+  // (snapshots, diagnostics and this final state only; 0 on the CPU).
+  std::int64_t device_to_host_bytes = 0;
   int dimension = 0;
   double time = 0;
   std::int64_t steps = 0;

@@ -91,9 +91,7 @@ void for_each_index(const char* what, std::size_t n, F f) {
   if (n == 0) return;
   each_kernel<<<unsigned((n + kBlock - 1) / kBlock), kBlock>>>(n, f);
   cuda::check(cudaGetLastError(), what, __FILE__, __LINE__);
-#ifdef RUBBLE_CUDA_SYNC_CHECK
-  cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
-#endif
+  if (cuda::sync_check_enabled()) cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
 }
 
 // Reduce op(f(i)) over i in [0, n) on the device.
@@ -179,10 +177,14 @@ class DeviceStore {
       RUBBLE_CUDA(cudaMemcpy(d.buf.get(), host, bytes, cudaMemcpyHostToDevice));
     });
   }
-  void download(ParticleStore<D>& ps) const {
+  // Returns the bytes copied.
+  std::size_t download(ParticleStore<D>& ps) const {
+    std::size_t total = 0;
     for_each_pair(ps, [&](const Field& d, void* host, std::size_t bytes) {
       RUBBLE_CUDA(cudaMemcpy(host, d.buf.get(), bytes, cudaMemcpyDeviceToHost));
+      total += bytes;
     });
+    return total;
   }
   // Copy another store of the same layout, device to device.
   void copy_from(const DeviceStore& o) {
@@ -446,6 +448,7 @@ struct CudaStepper<D>::Impl {
   DeviceOctree octree;  // Barnes-Hut (3-D)
   std::int64_t fallbacks_total = 0, evaluations = 0;
   bool host_current = true;
+  std::int64_t bytes_downloaded = 0;  // device-to-host bytes of host()
 
   Impl(const Scene& scene, ParticleStore<D>& ps, const Box<D>& dom)
       : host(ps),
@@ -882,10 +885,20 @@ ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt
 template <int D>
 const ParticleStore<D>& CudaStepper<D>::host() {
   if (!impl_->host_current) {
-    impl_->store.download(impl_->host);
+    impl_->bytes_downloaded += std::int64_t(impl_->store.download(impl_->host));
     impl_->host_current = true;
   }
   return impl_->host;
+}
+
+template <int D>
+std::size_t CudaStepper<D>::size() const {
+  return impl_->n();
+}
+
+template <int D>
+std::int64_t CudaStepper<D>::bytes_downloaded() const {
+  return impl_->bytes_downloaded;
 }
 
 template <int D>

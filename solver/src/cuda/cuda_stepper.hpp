@@ -38,6 +38,8 @@ class CudaStepper {
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   const ParticleStore<D>& host();  // downloads the device state into ps
+  std::size_t size() const;        // the particle count (no download)
+  std::int64_t bytes_downloaded() const;  // device-to-host bytes of host() so far
   std::int64_t correction_fallbacks() const;
   std::int64_t evaluations() const;
   bool solid() const;

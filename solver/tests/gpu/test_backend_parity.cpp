@@ -18,26 +18,21 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "parity_scenes.hpp"
 #include "rubble/run.hpp"
 
 using namespace rubble;
+using rubble::parity::run_on;
 
 namespace {
 
 bool gpu_present() {
   return backend_built(Backend::Cuda) && gpu_description().rfind("none", 0) != 0;
-}
-
-FinalState run_on(const Scene& scene, Backend b) {
-  RunOptions opt;
-  opt.write_output = false;
-  opt.quiet = true;
-  opt.backend = b;
-  return run_scene(scene, opt);
 }
 
 void expect_fields_agree(const FinalState& c, const FinalState& g, double tol, const std::string& what) {
@@ -91,65 +86,48 @@ void expect_conserved_agree(const FinalState& c, const FinalState& g, double tol
   EXPECT_LE(std::fabs(a.internal - b.internal), tol * e) << what << " internal";
 }
 
-// The scenes: 3-D hydro with summation density on a periodic box (the Sod
-// tube), 2-D solids with artificial stress, XSPH and a clamp of evolving
-// boundary particles (the oscillating plate), and 3-D self-gravity by direct
-// summation and by the octree, with damping (a small polytrope) - between
-// them every driver.
-// Each runs `steps` steps of exactly dt: dt is below the Courant limit and
-// the output interval (which bounds every step) is dt.
-std::string src(const std::string& rel) { return std::string(RUBBLE_SOURCE_DIR) + "/" + rel; }
-
-std::vector<std::string> steps_of(double dt, int steps) {
-  return {"simulation.end_time=" + std::to_string(dt * steps), "output.interval=" + std::to_string(dt)};
-}
-
-Scene sod3d(int steps) {
-  auto sets = steps_of(1e-3, steps);
-  sets.insert(sets.end(), {"bodies.0.spacing=0.0625", "bodies.1.spacing=0.125"});
-  return load_scene_file(src("verification/sod_shock_tube/sod_3d.toml"), sets);
-}
-
-Scene plate(int steps) {
-  auto sets = steps_of(2e-6, steps);
-  sets.insert(sets.end(), {"simulation.xsph=0.5", "bodies.0.velocity=[0.0, 1.0]"});
-  return load_scene_file(src("validation/oscillating_plate/oscillating_plate.toml"), sets);
-}
-
-Scene polytrope(int steps) {
-  auto sets = steps_of(1e-3, steps);
-  sets.insert(sets.end(), {"bodies.0.particles=2000", "gravity.mode=\"direct\""});
-  return load_scene_file(src("verification/polytrope/polytrope_n1.toml"), sets);
-}
-
-// Barnes-Hut: the GPU walks the tree once per particle, so the CPU does too
-// (group_size = 1); both build the same tree (test_octree_build.cpp).
-Scene polytrope_bh(int steps) {
-  auto sets = steps_of(1e-3, steps);
-  sets.insert(sets.end(), {"bodies.0.particles=2000", "gravity.group_size=1"});
-  return load_scene_file(src("verification/polytrope/polytrope_n1.toml"), sets);
-}
-
-const std::vector<std::pair<std::string, Scene (*)(int)>> kScenes = {
-    {"sod 3-D", sod3d}, {"plate", plate}, {"polytrope, direct gravity", polytrope},
-    {"polytrope, Barnes-Hut", polytrope_bh}};
-
 }  // namespace
 
-TEST(BackendParity, OneStepFieldByField) {
+// One test case per scene (parity_scenes.hpp), so that one failure does not
+// hide the others.
+class BackendParity : public ::testing::TestWithParam<rubble::parity::ParityScene> {};
+
+TEST_P(BackendParity, OneStepFieldByField) {
   if (!gpu_present()) GTEST_SKIP() << "no GPU: " << gpu_description();
-  for (const auto& [name, make] : kScenes) {
-    const FinalState cpu = run_on(make(1), Backend::Cpu), gpu = run_on(make(1), Backend::Cuda);
-    EXPECT_EQ(cpu.steps, 1) << name;
-    expect_fields_agree(cpu, gpu, 1e-12, name);
-  }
+  const auto& sc = GetParam();
+  const FinalState cpu = run_on(sc.make(1), Backend::Cpu), gpu = run_on(sc.make(1), Backend::Cuda);
+  EXPECT_EQ(cpu.steps, 1) << sc.name;
+  expect_fields_agree(cpu, gpu, 1e-12, sc.name);
 }
 
-TEST(BackendParity, HundredStepsConservedQuantities) {
+TEST_P(BackendParity, HundredStepsConservedQuantities) {
   if (!gpu_present()) GTEST_SKIP() << "no GPU: " << gpu_description();
-  for (const auto& [name, make] : kScenes) {
-    const FinalState cpu = run_on(make(100), Backend::Cpu), gpu = run_on(make(100), Backend::Cuda);
-    EXPECT_EQ(cpu.steps, 100) << name;
-    expect_conserved_agree(cpu, gpu, 1e-9, name);
-  }
+  const auto& sc = GetParam();
+  const FinalState cpu = run_on(sc.make(100), Backend::Cpu), gpu = run_on(sc.make(100), Backend::Cuda);
+  EXPECT_EQ(cpu.steps, 100) << sc.name;
+  expect_conserved_agree(cpu, gpu, 1e-9, sc.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, BackendParity, ::testing::ValuesIn(rubble::parity::scenes()),
+                         [](const ::testing::TestParamInfo<rubble::parity::ParityScene>& i) {
+                           return std::string(i.param.name);
+                         });
+
+// No per-step device-to-host traffic (issue #15 item 2): without snapshots
+// the CUDA backend downloads its state once, for the final state, however
+// many steps it takes; the non-finite check and the conserved sums are
+// device reductions that return a few bytes.
+TEST(DeviceTraffic, DownloadsDoNotGrowWithTheStepCount) {
+  if (!gpu_present()) GTEST_SKIP() << "no GPU: " << gpu_description();
+  auto run = [](int steps) {
+    Scene s = rubble::parity::sod3d(steps);
+    s.output.interval = s.simulation.end_time;  // no output before the end
+    return run_on(s, Backend::Cuda);
+  };
+  const FinalState a = run(10), b = run(40);
+  EXPECT_GT(a.device_to_host_bytes, 0);
+  EXPECT_EQ(a.device_to_host_bytes, b.device_to_host_bytes);
+  std::printf("device-to-host bytes: %lld over %lld steps, %lld over %lld steps\n",
+              static_cast<long long>(a.device_to_host_bytes), static_cast<long long>(a.steps),
+              static_cast<long long>(b.device_to_host_bytes), static_cast<long long>(b.steps));
 }
