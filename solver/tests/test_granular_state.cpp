@@ -118,3 +118,29 @@ TEST(WallExtrapolationParticle, HydrostaticFromFreeNeighboursOnly) {
   wall_extrapolation_particle<2>(c, 4, all(4));
   EXPECT_EQ(st.p[4], 123);
 }
+
+// The memory stops at eps_v = ln 2 (kMaxInelasticVolume): a particle opened
+// further (an ejected grain) keeps eps_v = ln 2 and is stress-free (at the
+// apex) until its density is back above rho0/2.
+TEST(TensionCracking, MemoryStopsAtTwiceTheVolume) {
+  const MaterialParams mat = granular();
+  SmallStore st(1);
+  RhsContext<2> c;
+  c.s = st.view();
+  c.mat = &mat;
+  st.rho[0] = kRho0;
+  for (int k = 0; k < 100; ++k) {  // open by 1 % a step, to 0.366 rho0
+    st.rho[0] *= Real(0.99);
+    eos_particle<2>(c, 0);
+    plastic_return_particle<2>(c, 0, true);
+  }
+  EXPECT_EQ(st.eps_v[0], kMaxInelasticVolume);
+  eos_particle<2>(c, 0);
+  EXPECT_LT(st.p[0], 0);  // rho exp(eps_v) < rho0: below the apex, returned to it
+  plastic_return_particle<2>(c, 0, false);
+  EXPECT_EQ(st.p[0], 0);
+  // closing to rho0/2 + 1e-4 compresses again
+  st.rho[0] = kRho0 / 2 * Real(1.0001);
+  eos_particle<2>(c, 0);
+  EXPECT_NEAR(st.p[0], kK * 1e-4, kK * 1e-8);
+}

@@ -46,6 +46,17 @@ struct RhsContext {
   bool has_body_force = false;
 };
 
+// Largest inelastic volume strain a Drucker-Prager particle remembers
+// (plastic_return_particle): ln 2, a particle whose volume has doubled. Far
+// beyond any granular packing (random loose packing of spheres is ~15 %
+// looser than the densest random one), such a particle has lost contact with
+// its neighbours (an ejected grain); it is then stress-free until its density
+// recovers instead of carrying the whole opening as memory. Without the cap
+// an ejected particle of the a = 4 column collapse reached eps_v = 1.28 at
+// 0.28 rho0, where a slight re-compression pushed with sigma/rho^2 ~13 times
+// a normal particle's and the run blew up (with particle shifting).
+constexpr Real kMaxInelasticVolume = Real(0.69314718055994531);
+
 // Largest fractional change of the distention alpha in one step (PHYSICS.md
 // §1 "rate limits on the evolved quantities"; §4 "~1e-2"): dt <= this *
 // alpha / |d alpha/dt| (dt_limit_particle).
@@ -214,7 +225,8 @@ RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32
 // eps_v): at the end of each step eps_v grows by the return's deps_v
 // (dilatant flow, psi > 0) and deps_crack (the opening of tension cracking,
 // (p_apex - p_trial)/K), and the EOS then sees the elastic density
-// rho exp(eps_v), whose pressure is the returned p to first order. So a
+// rho exp(eps_v), whose pressure is the returned p to first order, up to
+// eps_v = kMaxInelasticVolume. So a
 // granular material that opened in tension sits at the apex and is
 // compressed again as soon as it closes, as in Bui et al. 2008, whose
 // stress-rate form resets the stress to the apex (the mean stress has no
@@ -233,7 +245,7 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   s.p[a] = r.p;
   if (accumulate) {
     s.eps_p[a] += r.deps_p;
-    if (s.eps_v) s.eps_v[a] += r.deps_v + r.deps_crack;
+    if (s.eps_v) s.eps_v[a] = std::fmin(s.eps_v[a] + r.deps_v + r.deps_crack, kMaxInelasticVolume);
   }
 }
 
