@@ -161,12 +161,6 @@ Args parse_args(int argc, char** argv) {
   return a;
 }
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 // ---- geometry and scene ------------------------------------------------------
 struct Setup {
   double dx = 0, L0 = 0, H0 = 0, a = 0;  // column
@@ -218,10 +212,10 @@ rubble::Scene build_scene(const Args& args, Setup& st) {
   scene.simulation.end_time = st.t_end;
   scene.simulation.dt_min = 1e-12 * st.t_end;
   scene.output.interval = st.tau / 4;
-  scene.text += "\n# ---- granular_column_collapse_rung: spacing " + num(dx) + "; column [0, " + num(st.L0) +
-                "] x [0, " + num(st.H0) + "]; floor [" + num(-3 * dx) + ", " + num(st.x_floor_end) + "] x [" +
-                num(-3 * dx) + ", 0]; back wall [" + num(-3 * dx) + ", 0] x [0, " + num(st.y_wall_top) +
-                "]; end_time " + num(st.t_end) + " (10 sqrt(H0/g)); output interval " + num(st.tau / 4) + " ----\n";
+  scene.text += "\n# ---- granular_column_collapse_rung: spacing " + rubble::verification::exact_number(dx) + "; column [0, " + rubble::verification::exact_number(st.L0) +
+                "] x [0, " + rubble::verification::exact_number(st.H0) + "]; floor [" + rubble::verification::exact_number(-3 * dx) + ", " + rubble::verification::exact_number(st.x_floor_end) + "] x [" +
+                rubble::verification::exact_number(-3 * dx) + ", 0]; back wall [" + rubble::verification::exact_number(-3 * dx) + ", 0] x [0, " + rubble::verification::exact_number(st.y_wall_top) +
+                "]; end_time " + rubble::verification::exact_number(st.t_end) + " (10 sqrt(H0/g)); output interval " + rubble::verification::exact_number(st.tau / 4) + " ----\n";
   return scene;
 }
 
@@ -594,9 +588,9 @@ int run_column(const Args& args) {
     st.nx = std::lround(L0 / st.dx);
     st.ny = long(n);
     if (std::fabs(double(st.nx) * st.dx - L0) > 1e-9 * L0)
-      throw std::runtime_error("L0 / (H0/n) must be a whole number for n = " + num(n));
+      throw std::runtime_error("L0 / (H0/n) must be a whole number for n = " + rubble::verification::exact_number(n));
     const bool finest = i + 1 == args.resolutions.size();
-    res.push_back(run_one(args, st, n, num(n), finest));
+    res.push_back(run_one(args, st, n, rubble::verification::exact_number(n), finest));
   }
   // convergence over the ladder
   Json orders = Json::object({});
@@ -616,22 +610,22 @@ int run_column(const Args& args) {
     std::vector<Check> checks = run_checks(r);
     if (finest && i >= 1) {
       const Result& p = res[i - 1];
-      checks.push_back({"|runout(n=" + num(r.n) + ") - runout(n=" + num(p.n) + ")| / runout(n=" + num(r.n) +
+      checks.push_back({"|runout(n=" + rubble::verification::exact_number(r.n) + ") - runout(n=" + rubble::verification::exact_number(p.n) + ")| / runout(n=" + rubble::verification::exact_number(r.n) +
                             ") (two finest resolutions)",
                         std::fabs(r.toe - p.toe) / r.toe, 0.05, "<=",
                         kIssue + ": runout change between the two finest resolutions < 5 %"});
     }
     if (finest) {
-      checks.push_back({"|runout - experimental runout| / experimental runout (toe " + num(exp_toe) + " m)",
+      checks.push_back({"|runout - experimental runout| / experimental runout (toe " + rubble::verification::exact_number(exp_toe) + " m)",
                         std::fabs(r.toe - exp_toe) / exp_toe, 0.10, "<=",
                         kIssue + ": runout within 10 % of the reference; reference: " + kExpSource +
                             " (last digitised surface point)"});
       checks.push_back({"|failure-line angle at the end - experimental failure line| [deg] (reference " +
-                            num(exp_angle) + " deg, eps_p > 0.1)",
+                            rubble::verification::exact_number(exp_angle) + " deg, eps_p > 0.1)",
                         std::fabs(r.fail_final.angle - exp_angle), 5.0, "<=",
                         kIssue + ": failure-line angle within 5 deg of the reference; reference: least-squares line "
                                  "through the digitised failure line of " + kExpSource});
-      checks.push_back({"|early failure-line angle (t = tau/2) - Rankine 45 + phi/2| [deg] (Rankine " + num(rankine) +
+      checks.push_back({"|early failure-line angle (t = tau/2) - Rankine 45 + phi/2| [deg] (Rankine " + rubble::verification::exact_number(rankine) +
                             " deg, eps_p > 0.1)",
                         std::fabs(r.fail_early.angle - rankine), 5.0, "<=",
                         kIssue + ": failure-line angle within 5 deg of the reference; reference: Rankine active wedge "
@@ -707,7 +701,7 @@ int run_column(const Args& args) {
                                             {"rankine", "45 + phi/2 (Rankine active wedge; PHYSICS.md §7, issue #12)"}})},
         {"snapshots", Json::array(r.shots)},
     });
-    rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" + num(r.n) + "-cpu",
+    rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu",
                                        record);
   }
   (void)ok;
@@ -742,7 +736,7 @@ int run_aspect(const Args& args) {
     st.dx = dx;
     st.nx = std::max(2L, std::lround(std::sqrt(area / a_req) / dx));
     st.ny = std::max(2L, std::lround(a_req * double(st.nx)));
-    const std::string tag = "a" + num(a_req);
+    const std::string tag = "a" + rubble::verification::exact_number(a_req);
     const Result r = run_one(args, st, args.resolution, tag, false);
     const double rn = (r.toe - r.st.L0) / r.st.L0, hn = r.h_wall / r.st.L0;
     a_list.push_back(r.st.a);
@@ -756,7 +750,7 @@ int run_aspect(const Args& args) {
     std::printf("  a = %g: (L - L0)/L0 = %.3f (Lube 2005 %.3f, Lajeunesse 2005 %.3f), H/L0 = %.3f\n", r.st.a, rn,
                 lube.back(), laj.back(), hn);
     for (Check c : run_checks(r)) {
-      c.name = "a = " + num(r.st.a) + ": " + c.name;
+      c.name = "a = " + rubble::verification::exact_number(r.st.a) + ": " + c.name;
       if (!std::isfinite(c.value)) c.value = NAN;
       const bool pass = std::isfinite(c.value) && c.passed();
       ok = ok && pass;
@@ -811,7 +805,7 @@ int run_aspect(const Args& args) {
       {"reference_sources", Json::object({{"lube2005", kLubeSource}, {"lajeunesse2005", kLajSource}})},
   });
   rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" +
-                                                       num(args.resolution) + "-cpu", record);
+                                                       rubble::verification::exact_number(args.resolution) + "-cpu", record);
   (void)ok;
   return args.report_only ? 0 : rubble::verification::rung_exit_status(all_checks, args.known_failures);
 }

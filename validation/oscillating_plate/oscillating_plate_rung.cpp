@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "../../verification/common/conserved_csv.hpp"
+#include "../../verification/common/args.hpp"
 #include "../../verification/common/record.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
@@ -92,17 +93,8 @@ Args parse_args(int argc, char** argv) {
     } else throw std::runtime_error("unknown argument " + k);
   }
   if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
-  for (std::size_t i = 0; i < a.resolutions.size(); ++i)
-    if (a.resolutions[i] < 1 || a.resolutions[i] != std::round(a.resolutions[i]) ||
-        (i > 0 && a.resolutions[i] <= a.resolutions[i - 1]))
-      throw std::runtime_error("--resolutions: whole numbers of particles through the thickness, increasing");
+  rubble::verification::require_increasing_whole(a.resolutions, 1, "particles through the thickness");
   return a;
-}
-
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
 }
 
 // Euler-Bernoulli cantilever mode shape (clamped at s = 0, free at s = kL).
@@ -169,12 +161,12 @@ rubble::Scene build_scene(const Args& args, const Plate& p, double n, std::size_
                           int& tip_id) {
   const double dx = p.H / n;
   std::vector<std::string> sets = args.sets;
-  for (std::size_t i = 0; i < nbodies; ++i) sets.push_back("bodies." + std::to_string(i) + ".spacing=" + num(dx));
+  for (std::size_t i = 0; i < nbodies; ++i) sets.push_back("bodies." + std::to_string(i) + ".spacing=" + rubble::verification::exact_number(dx));
   rubble::Scene scene = rubble::load_scene_file(args.scene, sets);
   n_expected = 0;
   for (const rubble::BodyConfig& b : scene.bodies) {
     if (!whole_cells(b.max[0] - b.min[0], dx) || !whole_cells(b.max[1] - b.min[1], dx))
-      throw std::runtime_error("every body's sides must be whole multiples of dx = H/n = " + num(dx));
+      throw std::runtime_error("every body's sides must be whole multiples of dx = H/n = " + rubble::verification::exact_number(dx));
     n_expected += std::lround((b.max[0] - b.min[0]) / dx) * std::lround((b.max[1] - b.min[1]) / dx);
   }
   const double q = (p.xc - scene.bodies[0].min[0]) / dx;
@@ -204,8 +196,8 @@ rubble::Scene build_scene(const Args& args, const Plate& p, double n, std::size_
   }
   scene.bodies.insert(scene.bodies.end(), clamp.begin(), clamp.end());
   scene.text += "\n# ---- oscillating_plate_rung: body 0 split into " + std::to_string(nx) +
-                " columns of width " + num(dx) + " with v_y = " + num(args.v0) +
-                " c_s f(k s)/f(kL), kL = 1.875, s = x - " + num(p.xc) +
+                " columns of width " + rubble::verification::exact_number(dx) + " with v_y = " + rubble::verification::exact_number(args.v0) +
+                " c_s f(k s)/f(kL), kL = 1.875, s = x - " + rubble::verification::exact_number(p.xc) +
                 " (0 inside the clamp); the last column made of material '" + tip.name + "' (a copy of '" +
                 scene.materials[0].name + "') ----\n";
   return scene;
@@ -276,7 +268,7 @@ Result run_one(const Args& args, const Plate& p, std::size_t nbodies, double n) 
   long n_expected = 0;
   int tip_id = 0;
   const rubble::Scene scene = build_scene(args, p, n, nbodies, n_expected, tip_id);
-  const std::string out = args.out + "_" + num(n);
+  const std::string out = args.out + "_" + rubble::verification::exact_number(n);
   std::filesystem::remove_all(out);
   rubble::RunOptions opt;
   opt.out_dir = out;
@@ -408,7 +400,7 @@ int run(const Args& args) {
          kSource + ": period over >= 2 periods"},
     };
     if (prev)
-      checks.push_back({"period error / period error at H/dx = " + num(prev->n) + " (must fall)",
+      checks.push_back({"period error / period error at H/dx = " + rubble::verification::exact_number(prev->n) + " (must fall)",
                         r.error / prev->error, 1.0, "<=", kSource + ": the period error must fall with resolution"});
     if (finest)
       checks.push_back({"|T - T_theory| / T_theory at the finest resolution", r.error, 0.10, "<=",
@@ -478,7 +470,7 @@ int run(const Args& args) {
         {"energy_history", Json::object({{"t", r.et}, {"kinetic", r.ekin}, {"internal", r.eint}, {"total", r.etot}})},
         {"shapes", keep_shapes ? Json::array(r.shapes) : Json::array({})},
     });
-    rubble::verification::write_record(args.records, "oscillating_plate-" + args.label + "-" + num(r.n) + "-cpu", record);
+    rubble::verification::write_record(args.records, "oscillating_plate-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu", record);
     prev = &r;
   }
   return ok || args.report_only ? 0 : 1;

@@ -23,6 +23,15 @@ inline std::vector<double> parse_number_list(const std::string& s) {
   return v;
 }
 
+// A --resolutions list must be whole numbers >= `min`, strictly increasing;
+// `what` names the unit in the message ("particles over the height").
+inline void require_increasing_whole(const std::vector<double>& v, double min, const std::string& what) {
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (v[i] < min || v[i] != static_cast<double>(static_cast<long long>(v[i])) || (i > 0 && v[i] <= v[i - 1]))
+      throw std::runtime_error("--resolutions: whole numbers of " + what + " (>= " + std::to_string(int(min)) +
+                               "), increasing");
+}
+
 class ArgReader {
  public:
   ArgReader(int argc, char** argv) : argc_(argc), argv_(argv) {}

@@ -64,6 +64,14 @@ class Json {
   std::string text_;
 };
 
+// A number as text with every digit a double holds ("%.17g"): scene
+// overrides and the notes a rung adds to a scene read back the same value.
+inline std::string exact_number(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
 // A pass/fail check with its threshold and where the threshold comes from.
 struct Check {
   std::string name;

@@ -119,11 +119,6 @@ Args parse_args(int argc, char** argv) {
   return a;
 }
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
 
 void print_checks(const std::vector<Check>& checks) {
   for (const auto& c : checks)
@@ -500,10 +495,10 @@ int run_piston(const Args& args) {
   const double finest = *std::max_element(args.resolutions.begin(), args.resolutions.end());
   for (double N : args.resolutions) {
     std::vector<std::string> sets = args.sets;
-    sets.push_back("bodies.0.spacing=" + num(kRod / N));
-    sets.push_back("bodies.1.spacing=" + num(kRod / N));
-    sets.push_back("bodies.2.spacing=" + num(kRod / N));  // the pistons
-    sets.push_back("bodies.3.spacing=" + num(kRod / N));
+    sets.push_back("bodies.0.spacing=" + rubble::verification::exact_number(kRod / N));
+    sets.push_back("bodies.1.spacing=" + rubble::verification::exact_number(kRod / N));
+    sets.push_back("bodies.2.spacing=" + rubble::verification::exact_number(kRod / N));  // the pistons
+    sets.push_back("bodies.3.spacing=" + rubble::verification::exact_number(kRod / N));
     const Scene scene = load_scene_file(args.scene, sets);
     const MaterialConfig& mc = scene.materials.at(0);
     if (!mc.porosity.enabled) throw std::runtime_error("the scene's material is not porous");
@@ -583,7 +578,7 @@ int run_piston(const Args& args) {
     const std::string src_front = "issue #11 / Jutzi et al. 2008 §5.1: fronts within 2 smoothing lengths";
     auto rel = [](double a, double b) { return std::fabs(a - b) / std::fabs(b); };
     if (args.checks && last) {
-      const std::string at = " at N=" + num(N);
+      const std::string at = " at N=" + rubble::verification::exact_number(N);
       checks.push_back({"compacted plateau rho rel. error" + at, rel(ps.rho, Sw.rho), 0.01, "<=", src_plateau});
       checks.push_back({"compacted plateau p rel. error" + at, rel(ps.p, Sw.p), 0.01, "<=", src_plateau});
       checks.push_back({"compacted plateau alpha rel. error" + at, rel(ps.alpha, Sw.alpha), 0.01, "<=", src_plateau});
@@ -595,7 +590,7 @@ int run_piston(const Args& args) {
       checks.push_back({"compaction front |x - x_exact|/h" + at, std::fabs(xs_sph - xs) / hs, 2.0, "<=", src_front});
       checks.push_back({"elastic front |x - x_exact|/h" + at, std::fabs(xe_sph - xe) / he, 2.0, "<=", src_front});
       for (std::size_t k = 1; k < res_done.size(); ++k) {
-        const std::string step = " ratio coarse/fine, N " + num(res_done[k - 1]) + " -> " + num(res_done[k]);
+        const std::string step = " ratio coarse/fine, N " + rubble::verification::exact_number(res_done[k - 1]) + " -> " + rubble::verification::exact_number(res_done[k]);
         const std::string src = "issue #11: L1 errors fall with resolution";
         checks.push_back({"L1(rho)" + step, e_rho[k - 1] / e_rho[k], 1.0, ">=", src});
         checks.push_back({"L1(alpha)" + step, e_alpha[k - 1] / e_alpha[k], 1.0, ">=", src});

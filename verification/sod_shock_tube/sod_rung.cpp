@@ -67,11 +67,6 @@ Args parse_args(int argc, char** argv) {
   return a;
 }
 
-std::string num(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
 
 std::string joined(const std::vector<std::string>& items) {
   std::string s;
@@ -102,11 +97,11 @@ int main(int argc, char** argv) try {
   for (double res : args.resolutions) {
     std::vector<std::string> sets = args.sets;
     if (three_d) {
-      sets.push_back("bodies.0.spacing=" + num(1.0 / res));
-      sets.push_back("bodies.1.spacing=" + num(2.0 / res));
+      sets.push_back("bodies.0.spacing=" + rubble::verification::exact_number(1.0 / res));
+      sets.push_back("bodies.1.spacing=" + rubble::verification::exact_number(2.0 / res));
     } else {
-      sets.push_back("bodies.0.spacing=" + num(0.5 / res));
-      sets.push_back("bodies.1.spacing=" + num(4.0 / res));
+      sets.push_back("bodies.0.spacing=" + rubble::verification::exact_number(0.5 / res));
+      sets.push_back("bodies.1.spacing=" + rubble::verification::exact_number(4.0 / res));
     }
     const rubble::Scene scene = rubble::load_scene_file(args.scene, sets);
     const double gamma = scene.materials.at(0).gamma;
