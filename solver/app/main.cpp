@@ -1,12 +1,15 @@
 // The `rubble` command-line program.
 //
 //   rubble run SCENE.toml [--out DIR] [--backend cpu] [--set key=value ...] [--quiet]
+//              [--max-wall-time T] [--checkpoint-every T]
+//   rubble run --restart DIR/NAME.NNNN.h5 [--out DIR] [--set simulation.end_time=T ...]
 //   rubble info
 //   rubble eos MATERIAL --rho A:B:N --u C:D:M[:log] [--format table|csv] [--set key=value ...]
 //
 // Exit codes: 0 success, 1 unexpected error, 2 bad input or usage (the scene,
 // the options, an output directory that would be overwritten), 3 a run that
-// could not go on (RunError).
+// could not go on (RunError), 4 a run stopped early with a checkpoint to
+// resume from (SIGINT, SIGTERM, --max-wall-time).
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,6 +29,7 @@
 
 #include "rubble/core/error.hpp"
 #include "rubble/core/real.hpp"
+#include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/materials.hpp"
 
@@ -42,11 +46,53 @@ namespace {
 
 struct RunArgs {
   std::string scene;
+  std::string restart;  // a snapshot to resume from (instead of SCENE)
   std::string out;
   std::string backend;  // empty: RUBBLE_BACKEND from the environment, else cpu
   std::vector<std::string> sets;
+  std::string max_wall_time, checkpoint_every;
   bool quiet = false;
 };
+
+// A wall-clock duration: seconds ("3600", "90.5") or H:MM:SS ("11:55:00",
+// as batch systems write limits); > 0.
+double parse_duration(const std::string& text, const std::string& option) {
+  const std::string usage = "expected seconds (e.g. 3600) or H:MM:SS (e.g. 11:55:00), got '" + text + "'";
+  double total = 0;
+  std::size_t start = 0;
+  int parts = 0;
+  for (;;) {
+    const auto colon = text.find(':', start);
+    const std::string part = text.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
+    std::size_t used = 0;
+    double x = -1;
+    try {
+      x = std::stod(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size() || !std::isfinite(x) || x < 0) throw rubble::InputError(option, "", usage);
+    total = total * 60 + x;
+    ++parts;
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  if (parts > 3 || !(total > 0)) throw rubble::InputError(option, "", usage + " (a positive duration)");
+  return total;
+}
+
+// An output directory a new run may write into: absent or empty.
+void claim_output_directory(const fs::path& out) {
+  if (fs::exists(out)) {
+    if (!fs::is_directory(out))
+      throw rubble::InputError(out.string(), "",
+                               "the output path exists and is not a directory; choose another --out DIR");
+    if (!fs::is_empty(out))
+      throw rubble::InputError(out.string(), "",
+                               "the output directory exists and is not empty; its contents would be "
+                               "overwritten. Choose another --out DIR (or move the old one away)");
+  }
+}
 
 // Validate the scene first, then claim the output directory (never
 // overwriting anything), then run.
@@ -59,28 +105,64 @@ int run_command(const RunArgs& args) {
     return 2;
   }
 
-  const rubble::Scene scene = rubble::load_scene_file(args.scene, args.sets);
+  const bool resume = !args.restart.empty();
+  if (resume == !args.scene.empty())
+    throw rubble::InputError("rubble run", "", resume ? "give either SCENE or --restart SNAPSHOT, not both"
+                                                      : "give a SCENE file (or --restart SNAPSHOT to resume a run)");
+  rubble::RunOptions options;
+  if (!args.max_wall_time.empty()) options.max_wall_seconds = parse_duration(args.max_wall_time, "--max-wall-time");
+  if (!args.checkpoint_every.empty())
+    options.checkpoint_every_seconds = parse_duration(args.checkpoint_every, "--checkpoint-every");
 
-  const fs::path out = args.out.empty() ? fs::path("out") / fs::path(args.scene).stem() : fs::path(args.out);
-  if (fs::exists(out)) {
-    if (!fs::is_directory(out))
-      throw rubble::InputError(out.string(), "",
-                               "the output path exists and is not a directory; choose another --out DIR");
-    if (!fs::is_empty(out))
-      throw rubble::InputError(out.string(), "",
-                               "the output directory exists and is not empty; its contents would be "
-                               "overwritten. Choose another --out DIR (or move the old one away)");
+  const rubble::Scene scene =
+      resume ? rubble::load_restart_scene(args.restart, args.sets) : rubble::load_scene_file(args.scene, args.sets);
+
+  fs::path out;
+  if (!resume) {
+    out = args.out.empty() ? fs::path("out") / fs::path(args.scene).stem() : fs::path(args.out);
+    claim_output_directory(out);
+  } else {
+    // Resume into the snapshot's own directory (default) or a new one.
+    fs::path from = fs::path(args.restart).parent_path();
+    if (from.empty()) from = ".";
+    out = args.out.empty() ? from : fs::path(args.out);
+    std::error_code ec;
+    if (fs::equivalent(out, from, ec)) {
+      // the run's own files after the restart point would be overwritten
+      const int next = rubble::read_snapshot_meta(args.restart).restart.next_snapshot;
+      for (const auto& entry : fs::directory_iterator(out)) {
+        const std::string name = entry.path().filename().string();
+        const std::string stem = scene.output.name + ".";
+        if (name.size() != stem.size() + 7 || name.rfind(stem, 0) != 0 || name.substr(name.size() - 3) != ".h5") continue;
+        const std::string digits = name.substr(stem.size(), 4);
+        if (digits.find_first_not_of("0123456789") != std::string::npos) continue;
+        if (std::stoi(digits) >= next)
+          throw rubble::InputError(entry.path().string(), "",
+                                   "exists: the run went on past the restart snapshot, and resuming here would "
+                                   "overwrite it. Resume into a new directory with --out DIR (or move the later "
+                                   "snapshots away)");
+      }
+    } else {
+      claim_output_directory(out);
+    }
   }
   fs::create_directories(out);
 
-  rubble::RunOptions options;
   options.out_dir = out.string();
   options.write_output = true;
   options.progress = isatty(2) != 0;
   options.quiet = args.quiet;
   options.backend = backend;
+  options.restart_from = args.restart;
+  rubble::install_stop_signal_handlers();
   const rubble::FinalState final_state = rubble::run_scene(scene, options);
 
+  if (!final_state.stopped.empty()) {
+    std::cerr << "rubble: stopped by " << final_state.stopped << " at t = " << final_state.time << " s (step "
+              << final_state.steps << "); checkpoint " << final_state.checkpoint << "\n"
+              << "rubble: resume with: rubble run --restart " << final_state.checkpoint << "\n";
+    return rubble::kExitStopped;
+  }
   if (!args.quiet)
     std::cout << "rubble: done: t = " << final_state.time << " s after " << final_state.steps << " steps in "
               << final_state.wall_seconds << " s; output in " << out.string() << "\n";
@@ -205,8 +287,16 @@ int main(int argc, char** argv) {
 
   RunArgs run_args;
   CLI::App* run = app.add_subcommand("run", "Run a scene (TOML file) to its end time");
-  run->add_option("SCENE", run_args.scene, "The scene file (TOML); keys are documented in docs/scene.md")
-      ->required();
+  run->add_option("SCENE", run_args.scene, "The scene file (TOML); keys are documented in docs/scene.md");
+  run->add_option("--restart", run_args.restart,
+                  "Resume from a snapshot or checkpoint this program wrote (DIR/NAME.NNNN.h5 or "
+                  "DIR/NAME.checkpoint.h5) instead of starting SCENE; output continues in DIR unless --out "
+                  "names a new directory; --set may then change only simulation.end_time, simulation.max_steps "
+                  "and output.*");
+  run->add_option("--max-wall-time", run_args.max_wall_time,
+                  "Stop cleanly with a checkpoint before this wall time has passed: seconds or H:MM:SS (exit code 4)");
+  run->add_option("--checkpoint-every", run_args.checkpoint_every,
+                  "Also write the checkpoint NAME.checkpoint.h5 every so many wall seconds (or H:MM:SS)");
   run->add_option("--out", run_args.out,
                   "Output directory for snapshots and conserved.csv (default: out/<scene file stem>); "
                   "must not exist or be empty");

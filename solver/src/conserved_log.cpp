@@ -3,7 +3,10 @@
 #include "rubble/io/conserved_log.hpp"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <string>
 #include <stdexcept>
 #include <vector>
 
@@ -36,6 +39,43 @@ ConservedLog::ConservedLog(const std::string& path, int dimension)
   if (!file_) throw std::runtime_error("conserved log '" + path_ + "': cannot create: " + std::strerror(errno));
   if (std::fprintf(file_.get(), "%s\n", header(dim_).c_str()) < 0 || std::fflush(file_.get()) != 0)
     throw std::runtime_error("conserved log '" + path_ + "': writing the header failed");
+}
+
+ConservedLog::ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step)
+    : path_(path), dim_(dimension), file_(nullptr, &std::fclose) {
+  if (dim_ < 1 || dim_ > 3) throw std::invalid_argument("ConservedLog: dimension must be 1, 2 or 3");
+  std::string kept = header(dim_) + "\n";
+  if (std::ifstream in(history); in) {
+    std::string line;
+    std::getline(in, line);
+    if (line != header(dim_))
+      throw std::runtime_error("conserved log '" + history + "': its header is not that of a " + std::to_string(dim_) +
+                               "-D run; cannot continue it");
+    while (std::getline(in, line)) {
+      const auto a = line.find(','), b = a == std::string::npos ? a : line.find(',', a + 1);
+      if (b == std::string::npos) continue;  // a line cut short by the interruption
+      std::int64_t step = 0;
+      try {
+        step = std::stoll(line.substr(a + 1, b - a - 1));
+      } catch (const std::exception&) {
+        continue;
+      }
+      if (step <= last_step) kept += line + "\n";
+    }
+  }
+  const std::string tmp = path_ + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << kept;
+    if (!out.flush())
+      throw std::runtime_error("conserved log '" + tmp + "': cannot write: " + std::strerror(errno));
+  }
+  if (std::rename(tmp.c_str(), path_.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("conserved log '" + path_ + "': rename failed: " + std::strerror(errno));
+  }
+  file_.reset(std::fopen(path_.c_str(), "a"));
+  if (!file_) throw std::runtime_error("conserved log '" + path_ + "': cannot open to append: " + std::strerror(errno));
 }
 
 void ConservedLog::append(const ConservedRecord& r) {

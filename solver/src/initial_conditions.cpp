@@ -114,7 +114,8 @@ std::vector<Vec<D>> polytrope_points(const BodyConfig& b, const Polytrope& model
 }  // namespace
 
 template <int D>
-void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, ParticleStore<D>& ps) {
+std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
+                                          ParticleStore<D>& ps) {
   const auto materials = material_params_from_scene(scene);
   std::vector<std::vector<Vec<D>>> body_points;
   std::size_t total = 0;
@@ -133,6 +134,8 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
                                                " particles, more than a 32-bit particle id can number");
   ps.allocate(total, needs);
 
+  std::vector<std::int64_t> first{0};
+  for (const auto& points : body_points) first.push_back(first.back() + std::int64_t(points.size()));
   std::size_t next = 0;
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodyConfig& b = scene.bodies[i];
@@ -199,6 +202,7 @@ void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, 
       ++next;
     }
   }
+  return first;
 }
 
 template <int D>
@@ -214,7 +218,7 @@ Box<D> domain_from_scene(const Scene& scene) {
 
 #define RUBBLE_INSTANTIATE(D)                                                                      \
   template double lattice_cell_volume<D>(Lattice, double);                                         \
-  template void generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&);    \
+  template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&); \
   template Box<D> domain_from_scene<D>(const Scene&);
 RUBBLE_INSTANTIATE(1)
 RUBBLE_INSTANTIATE(2)

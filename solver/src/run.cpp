@@ -1,13 +1,18 @@
 // run_scene: set up particles from the scene, step them to the end time,
 // write snapshots, the XDMF index and conserved.csv.
+#include <signal.h>  // sigaction (POSIX)
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "hydro_cpu.hpp"
 #ifdef RUBBLE_HAVE_CUDA
@@ -35,16 +40,56 @@
 namespace rubble {
 namespace {
 
-// Writes snapshots NAME.NNNN.h5, NAME.xdmf and conserved.csv into out_dir.
+// Where the time loop starts: t = 0 for a fresh run, or the state a
+// restart snapshot recorded (RestartState).
+struct LoopStart {
+  double t = 0;
+  std::int64_t step = 0;
+  double dt_proposal = 0;   // 0: from simulation.dt_initial or the step limit
+  double next_output = 0;   // 0: the first output time
+  int next_snapshot = 0;    // number of the next NAME.NNNN.h5
+  bool resumed = false;
+  std::filesystem::path from_dir;  // the restart snapshot's directory
+};
+
+// The loop's own state beyond the particles, as a snapshot records it.
+struct LoopState {
+  double dt_proposal = 0;
+  double next_output = 0;
+};
+
+// Writes snapshots NAME.NNNN.h5, the checkpoint NAME.checkpoint.h5,
+// NAME.xdmf and conserved.csv into out_dir. Every file it writes carries
+// the restart group, so a run can resume from any of them.
 template <int D>
 class OutputWriter {
  public:
-  OutputWriter(const Scene& scene, const RunOptions& opt)
-      : scene_(scene), enabled_(opt.write_output), dir_(opt.out_dir) {
+  OutputWriter(const Scene& scene, const RunOptions& opt, const LoopStart& start, std::vector<std::int64_t> body_first)
+      : scene_(scene), enabled_(opt.write_output), dir_(opt.out_dir), count_(start.next_snapshot),
+        body_first_(std::move(body_first)) {
     if (!enabled_) return;
     std::filesystem::create_directories(dir_);
     xdmf_ = std::make_unique<XdmfWriter>((dir_ / (scene.output.name + ".xdmf")).string(), D);
-    log_ = std::make_unique<ConservedLog>((dir_ / "conserved.csv").string(), D);
+    const std::string csv = (dir_ / "conserved.csv").string();
+    if (!start.resumed) {
+      log_ = std::make_unique<ConservedLog>(csv, D);
+      return;
+    }
+    // Resumed: into the restart snapshot's own directory, the run's
+    // snapshots up to it stay in the index and conserved.csv keeps its rows
+    // up to the restart step; into a new directory, conserved.csv starts
+    // with the old run's rows up to the restart step (when they exist).
+    std::error_code ec;
+    const bool same_dir = std::filesystem::equivalent(dir_, start.from_dir, ec);
+    if (same_dir) {
+      for (int k = 0; k < count_; ++k) {
+        const std::string name = snapshot_filename(scene.output.name, k);
+        if (!std::filesystem::exists(dir_ / name)) continue;
+        const SnapshotSummary sum = read_snapshot_summary<D>((dir_ / name).string());
+        xdmf_->add_snapshot(name, sum.time, sum.n, sum.fields);
+      }
+    }
+    log_ = std::make_unique<ConservedLog>(csv, D, (start.from_dir / "conserved.csv").string(), start.step);
   }
 
   bool enabled() const { return enabled_; }
@@ -55,32 +100,79 @@ class OutputWriter {
     if (enabled_) log_->append(r);
   }
 
-  void snapshot(const ParticleStore<D>& ps, double t, std::int64_t step) {
+  // The next regular snapshot; `loop` is the state after it (the next
+  // output time already advanced).
+  void snapshot(const ParticleStore<D>& ps, double t, std::int64_t step, const LoopState& loop) {
     if (!enabled_ || !scene_.output.snapshots) return;
-    char name[512];
-    std::snprintf(name, sizeof name, "%s.%04d.h5", scene_.output.name.c_str(), count_++);
-    write_file(ps, t, step, name);
+    const std::string name = snapshot_filename(scene_.output.name, count_++);
+    write_file(ps, t, step, name, restart_state(loop, false));
     xdmf_->add_snapshot(name, t, ps.n, snapshot_fields<D>(ps));
     xdmf_->write();
   }
 
-  // A snapshot of the state that stopped the run, beside the regular ones.
-  void diagnostic(const ParticleStore<D>& ps, double t, std::int64_t step) {
-    if (enabled_) write_file(ps, t, step, scene_.output.name + ".failed.h5");
+  // NAME.checkpoint.h5 (replaced atomically by each new one): a restart
+  // point between regular outputs. Returns its path ("" without output).
+  std::string checkpoint(const ParticleStore<D>& ps, double t, std::int64_t step, const LoopState& loop) {
+    if (!enabled_) return {};
+    const std::string name = scene_.output.name + ".checkpoint.h5";
+    write_file(ps, t, step, name, restart_state(loop, true));
+    return (dir_ / name).string();
   }
 
+  // A snapshot of the state that stopped the run, beside the regular ones.
+  void diagnostic(const ParticleStore<D>& ps, double t, std::int64_t step) {
+    if (enabled_) write_file(ps, t, step, scene_.output.name + ".failed.h5", std::nullopt);
+  }
+
+  // Wall seconds the slowest snapshot write took so far.
+  double slowest_write() const { return slowest_write_; }
+
  private:
-  void write_file(const ParticleStore<D>& ps, double t, std::int64_t step, const std::string& name) {
-    write_snapshot<D>((dir_ / name).string(), ps, SnapshotMeta{t, step, scene_.text, RUBBLE_VERSION, RUBBLE_COMMIT});
+  RestartState restart_state(const LoopState& loop, bool checkpoint) const {
+    RestartState r;
+    r.dt_proposal = loop.dt_proposal;
+    r.next_output = loop.next_output;
+    r.next_snapshot = count_;
+    r.checkpoint = checkpoint;
+    r.scene_file = scene_.file;
+    r.scene_source = scene_.source_text;
+    r.overrides = scene_.overrides;
+    r.libraries = scene_.libraries;
+    r.body_first_id = body_first_;
+    return r;
+  }
+
+  void write_file(const ParticleStore<D>& ps, double t, std::int64_t step, const std::string& name,
+                  const std::optional<RestartState>& restart) {
+    const auto start = std::chrono::steady_clock::now();
+    SnapshotMeta meta;
+    meta.time = t;
+    meta.step = step;
+    meta.scene_text = scene_.text;
+    meta.version = RUBBLE_VERSION;
+    meta.commit = RUBBLE_COMMIT;
+    if (restart) {
+      meta.restartable = true;
+      meta.restart = *restart;
+    }
+    write_snapshot<D>((dir_ / name).string(), ps, meta);
+    slowest_write_ = std::max(slowest_write_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
 
   const Scene& scene_;
   bool enabled_;
   std::filesystem::path dir_;
   int count_ = 0;
+  std::vector<std::int64_t> body_first_;
+  double slowest_write_ = 0;
   std::unique_ptr<XdmfWriter> xdmf_;
   std::unique_ptr<ConservedLog> log_;
 };
+
+// SIGINT / SIGTERM received (install_stop_signal_handlers), 0 if none.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void rubble_stop_handler(int sig) { g_stop_signal = sig; }
 
 // A periodic axis must be long enough that no particle's kernel (with the
 // neighbour search's 15 % skin) overlaps a second image of another particle.
@@ -92,8 +184,8 @@ void check_periodic_room(const Scene& scene, const Box<D>& domain, const Particl
     if (!domain.periodic[k]) continue;
     if (Real(2.5) * h_max >= domain.length(k))
       throw InputError(scene.file, "domain.max",
-                       "periodic length " + std::to_string(domain.length(k)) + " along axis " + std::to_string(k) +
-                           " is too short for the largest smoothing length " + std::to_string(h_max) +
+                       "periodic length " + fmt_g(domain.length(k)) + " along axis " + std::to_string(k) +
+                           " is too short for the largest smoothing length " + fmt_g(h_max) +
                            " (needs more than 2.5 h): enlarge the domain or refine the spacing");
   }
 }
@@ -103,8 +195,12 @@ void check_periodic_room(const Scene& scene, const Box<D>& domain, const Particl
 template <int D>
 class CpuStepper {
  public:
-  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain) : ps_(ps), sys_(scene, ps, domain) {
+  // `resumed`: the store holds a restart snapshot's state, rates included,
+  // in the order it was written: neither sorted nor evaluated again.
+  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed)
+      : ps_(ps), sys_(scene, ps, domain) {
     for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
+    if (resumed) return;
     sys_.sort_particles();
     sys_.evaluate();
   }
@@ -144,38 +240,60 @@ class CpuStepper {
 };
 
 template <int D, class Stepper>
-FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
-                    std::chrono::steady_clock::time_point wall_start) {
+FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, const LoopStart& start,
+                    std::vector<std::int64_t> body_first, std::chrono::steady_clock::time_point wall_start) {
   const SimulationConfig& sim = scene.simulation;
-  OutputWriter<D> out(scene, opt);
+  OutputWriter<D> out(scene, opt, start, std::move(body_first));
   Progress progress(sim.end_time, opt.progress && !opt.quiet);
   const double t_end = sim.end_time;
   const double dt_min = sim.dt_min > 0 ? sim.dt_min : 1e-12 * t_end;
   const double out_interval = scene.output.interval > 0 ? scene.output.interval : t_end;
-  double t = 0, next_output = std::min(out_interval, t_end);
-  double dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : sys.dt_limit();
-  std::int64_t step = 0;
-  if (out.writes_snapshots()) out.snapshot(sys.host(), t, step);
-  if (out.enabled()) out.log(sys.conserved(t, step, 0));
+  double t = start.t;
+  std::int64_t step = start.step;
+  LoopState loop;
+  if (!start.resumed) {
+    loop.next_output = std::min(out_interval, t_end);
+    loop.dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : sys.dt_limit();
+    if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
+    if (out.enabled()) out.log(sys.conserved(t, step, 0));
+  } else {
+    loop.dt_proposal = start.dt_proposal;
+    // an end_time extended on resuming moves the next output past t
+    loop.next_output = std::min(start.next_output, t_end);
+    while (loop.next_output <= t * (1 + 1e-12) && loop.next_output < t_end)
+      loop.next_output = std::min(loop.next_output + out_interval, t_end);
+  }
+
+  // Clean stops: a signal, the wall-time limit (with room for two of the
+  // slowest steps and the slowest write so far), periodic checkpoints.
+  const auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
+  double slowest_step = 0, last_wall = wall();
+  double next_checkpoint = opt.checkpoint_every_seconds > 0 ? last_wall + opt.checkpoint_every_seconds : 0;
+  std::string stopped, checkpoint;
 
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
   while (t < t_end * (1 - 1e-12)) {
     if (step >= sim.max_steps)
-      throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + std::to_string(t));
+      throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t));
     // Sorting permutes every field, rates included, so the state needs no
     // new evaluation; neighbour lists are rebuilt at each evaluation anyway.
     if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
     const double limit = sys.dt_limit();
-    double dt = std::min(limit, next_output - t);
+    double dt = std::min(limit, loop.next_output - t);
+    // the step the physics allows, before it is shortened to land on an
+    // output or the end of damping: what simulation.dt_min bounds
+    double dt_physics = limit;
     const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
     if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
     if (sim.integrator == Integrator::Leapfrog) {
       sys.leapfrog(dt);
     } else {
-      dt = std::min(dt, dt_proposal);
+      dt_physics = std::min(limit, loop.dt_proposal);
+      dt = std::min(dt, loop.dt_proposal);
       const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
+      if (r.rejections > 0) dt_physics = std::min(dt_physics, double(r.dt_taken));  // error control cut it
       dt = r.dt_taken;
-      dt_proposal = r.dt_next;
+      loop.dt_proposal = r.dt_next;
     }
     t += dt;
     ++step;
@@ -187,19 +305,35 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
     const std::size_t bad = sys.first_non_finite();
     if (bad < sys.size()) {
       out.diagnostic(sys.host(), t, step);
-      throw RunError("non-finite value in particle " + std::to_string(bad) + " at t = " + std::to_string(t) +
-                     " (step " + std::to_string(step) + "); diagnostic snapshot written");
+      throw RunError("non-finite value in particle " + std::to_string(bad) + " at t = " + fmt_g(t) + " (step " +
+                     std::to_string(step) + "); diagnostic snapshot written");
     }
-    if (dt < dt_min && t < t_end * (1 - 1e-12) && next_output - t > dt_min) {
+    if (dt_physics < dt_min && t < t_end * (1 - 1e-12)) {
       out.diagnostic(sys.host(), t, step);
-      throw RunError("time step collapsed to " + std::to_string(dt) + " < dt_min at t = " + std::to_string(t) +
-                     "; diagnostic snapshot written");
+      throw RunError("time step collapsed to " + fmt_g(dt_physics) + " s < dt_min = " + fmt_g(dt_min) +
+                     " s at t = " + fmt_g(t) + " (step " + std::to_string(step) + "); diagnostic snapshot written");
     }
     if (out.enabled()) out.log(sys.conserved(t, step, dt));
     progress.update(t, dt, step);
-    if (t >= next_output * (1 - 1e-12)) {
-      if (out.writes_snapshots()) out.snapshot(sys.host(), t, step);
-      next_output = std::min(next_output + out_interval, t_end);
+    if (t >= loop.next_output * (1 - 1e-12)) {
+      loop.next_output = std::min(loop.next_output + out_interval, t_end);
+      if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
+    }
+
+    const double now = wall();
+    slowest_step = std::max(slowest_step, now - last_wall);
+    last_wall = now;
+    if (t >= t_end * (1 - 1e-12)) break;
+    if (g_stop_signal != 0) stopped = g_stop_signal == SIGINT ? "SIGINT" : g_stop_signal == SIGTERM ? "SIGTERM" : "a signal";
+    else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
+      stopped = "the wall-time limit";
+    if (!stopped.empty()) {
+      checkpoint = out.checkpoint(sys.host(), t, step, loop);
+      break;
+    }
+    if (next_checkpoint > 0 && now >= next_checkpoint) {
+      out.checkpoint(sys.host(), t, step, loop);
+      next_checkpoint = wall() + opt.checkpoint_every_seconds;
     }
   }
   progress.finish();
@@ -234,6 +368,8 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys,
   if (sim.kernel_correction && sys.solid() && !opt.quiet)
     std::fprintf(stderr, "kernel-gradient correction: %lld of %lld particle evaluations fell back to the identity\n",
                  static_cast<long long>(fs.correction_fallbacks), static_cast<long long>(fs.particle_evaluations));
+  fs.stopped = stopped;
+  fs.checkpoint = checkpoint;
   fs.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return fs;
 }
@@ -265,18 +401,47 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
   }
   ParticleStore<D> ps;
-  generate_bodies<D>(scene, hfact, needs, ps);
+  LoopStart start;
+  std::vector<std::int64_t> body_first;
+  if (opt.restart_from.empty()) {
+    body_first = generate_bodies<D>(scene, hfact, needs, ps);
+  } else {
+    SnapshotMeta meta;
+    read_restart<D>(opt.restart_from, ps, meta);
+    // the snapshot must hold exactly the fields this scene's run allocates
+    ParticleStore<D> layout;
+    layout.allocate(1, needs);
+    if (layout.allocated_fields() != ps.allocated_fields()) {
+      std::string have, want;
+      for (const std::string& f : ps.allocated_fields()) have += (have.empty() ? "" : ", ") + f;
+      for (const std::string& f : layout.allocated_fields()) want += (want.empty() ? "" : ", ") + f;
+      throw InputError(opt.restart_from, "", "holds the fields {" + have + "} but its scene runs with {" + want + "}");
+    }
+    if (meta.time >= sim.end_time * (1 - 1e-12))
+      throw InputError(opt.restart_from, "simulation.end_time",
+                       "the snapshot is at t = " + fmt_g(meta.time) + " s, not before end_time = " + fmt_g(sim.end_time) +
+                           " s: nothing to integrate (extend the run with --set simulation.end_time=T)");
+    start.t = meta.time;
+    start.step = meta.step;
+    start.dt_proposal = meta.restart.dt_proposal;
+    start.next_output = meta.restart.next_output;
+    start.next_snapshot = meta.restart.next_snapshot;
+    start.resumed = true;
+    start.from_dir = std::filesystem::path(opt.restart_from).parent_path();
+    if (start.from_dir.empty()) start.from_dir = ".";
+    body_first = meta.restart.body_first_id;
+  }
 
   const Box<D> domain = domain_from_scene<D>(scene);
   check_periodic_room<D>(scene, domain, ps);
 #ifdef RUBBLE_HAVE_CUDA
   if (opt.backend == Backend::Cuda) {
-    CudaStepper<D> sys(scene, ps, domain);
-    return run_loop<D>(scene, opt, sys, wall_start);
+    CudaStepper<D> sys(scene, ps, domain, start.resumed);
+    return run_loop<D>(scene, opt, sys, start, std::move(body_first), wall_start);
   }
 #endif
-  CpuStepper<D> sys(scene, ps, domain);
-  return run_loop<D>(scene, opt, sys, wall_start);
+  CpuStepper<D> sys(scene, ps, domain, start.resumed);
+  return run_loop<D>(scene, opt, sys, start, std::move(body_first), wall_start);
 }
 
 }  // namespace
@@ -306,6 +471,46 @@ DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>*, const Real*, const Real
   throw RunError("cuda_barnes_hut_field: this build has no CUDA backend (configure with -DRUBBLE_CUDA=ON)");
 }
 #endif
+
+Scene load_restart_scene(const std::string& snapshot, const std::vector<std::string>& extra_overrides) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(snapshot, ec)) throw InputError(snapshot, "", "no such snapshot file");
+  SnapshotMeta meta;
+  try {
+    meta = read_snapshot_meta(snapshot);
+  } catch (const std::runtime_error& e) {
+    throw InputError(snapshot, "", std::string("cannot read it as a snapshot: ") + e.what());
+  }
+  if (!meta.restartable)
+    throw InputError(snapshot, "",
+                     "has no restart data (a diagnostic .failed.h5 snapshot, or one written before restarts existed)");
+  // Only the run's extent and its output may change on resuming.
+  for (const std::string& o : extra_overrides) {
+    const std::string key = o.substr(0, o.find('='));
+    const bool allowed = key == "simulation.end_time" || key == "simulation.max_steps" || key.rfind("output.", 0) == 0;
+    if (!allowed)
+      throw InputError(snapshot, key,
+                       "--set " + o + ": a resumed run keeps the physics it started with; only simulation.end_time, "
+                       "simulation.max_steps and output.* may be changed");
+  }
+  std::vector<std::string> overrides = meta.restart.overrides;
+  overrides.insert(overrides.end(), extra_overrides.begin(), extra_overrides.end());
+  Scene scene = parse_scene(meta.restart.scene_source, meta.restart.scene_file, overrides, &meta.restart.libraries);
+  if (scene.simulation.dimension != meta.dimension)
+    throw InputError(snapshot, "simulation.dimension",
+                     "the snapshot holds a " + std::to_string(meta.dimension) + "-D state but its scene says " +
+                         std::to_string(scene.simulation.dimension) + "-D");
+  return scene;
+}
+
+void install_stop_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = rubble_stop_handler;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;  // a second signal takes the default action: the process ends at once
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 
 Backend default_backend() {
   const char* env = std::getenv("RUBBLE_BACKEND");

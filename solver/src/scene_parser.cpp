@@ -184,10 +184,13 @@ std::string apply_override(toml::table& root, const std::string& text, const std
 
 class SceneReader {
  public:
-  SceneReader(std::string file, std::map<std::string, std::string> set_by)
-      : file_(std::move(file)), set_by_(std::move(set_by)) {}
+  SceneReader(std::string file, std::map<std::string, std::string> set_by,
+              const std::vector<LibraryText>* embedded = nullptr)
+      : file_(std::move(file)), set_by_(std::move(set_by)), embedded_(embedded) {}
 
   Scene read(const toml::table& root);
+  // The library files read() used (Scene::libraries).
+  const std::vector<LibraryText>& libraries_read() const { return libraries_read_; }
   // A material file read on its own (`rubble eos`, load_material): the keys
   // of a library file, messages with keys relative to the file.
   MaterialConfig read_library_material(const std::string& name, const toml::table& t);
@@ -195,6 +198,8 @@ class SceneReader {
  private:
   std::string file_;
   std::map<std::string, std::string> set_by_;  // message key -> the --set text that wrote it
+  const std::vector<LibraryText>* embedded_;   // library texts to use instead of the disk (restart)
+  std::vector<LibraryText> libraries_read_;    // every library file read, as read
   int dim_ = 0;
   // Materials merged from a library file and the scene are copies, which
   // toml++ gives no source position: where each key came from, as text for
@@ -449,14 +454,20 @@ bool ends_with(const std::string& s, std::string_view tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// A TOML file as a table; a malformed file is an InputError naming it.
-toml::table parse_toml_file(const std::string& path) {
+// A file's whole content; an unreadable file is an InputError naming it.
+std::string read_text_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file for reading");
   std::ostringstream buf;
   buf << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", "error while reading the file");
+  return buf.str();
+}
+
+// TOML text as a table; malformed text is an InputError naming `path`.
+toml::table parse_toml_text(const std::string& text, const std::string& path) {
   try {
-    return toml::parse(buf.str(), path);
+    return toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     const auto& at = e.source().begin;
     throw InputError(path, "",
@@ -464,6 +475,9 @@ toml::table parse_toml_file(const std::string& path) {
                          ": " + std::string(e.description()));
   }
 }
+
+// A TOML file as a table; a malformed file is an InputError naming it.
+toml::table parse_toml_file(const std::string& path) { return parse_toml_text(read_text_file(path), path); }
 
 // Copy `src` into `dst`, key by key; tables present in both are merged, so
 // a scene may override a single parameter (tillotson.A) of a library table.
@@ -784,8 +798,23 @@ MaterialConfig SceneReader::read_material(const std::string& name, const toml::t
     m.name = name;
     return m;
   }
-  const std::string path = resolve_library(*spec, sub(p, "library"), t.get("library"));
-  toml::table merged = parse_toml_file(path);
+  LibraryText lib;
+  lib.spec = *spec;
+  if (embedded_) {  // a resumed run: the library as the run first read it
+    const auto it = std::find_if(embedded_->begin(), embedded_->end(),
+                                 [&](const LibraryText& l) { return l.spec == *spec; });
+    if (it == embedded_->end())
+      fail(sub(p, "library"), "library material '" + *spec + "' is not among those the snapshot carries", t.get("library"));
+    lib = *it;
+  } else {
+    lib.path = resolve_library(*spec, sub(p, "library"), t.get("library"));
+    lib.text = read_text_file(lib.path);
+  }
+  const std::string path = lib.path;
+  toml::table merged = parse_toml_text(lib.text, path);
+  if (std::none_of(libraries_read_.begin(), libraries_read_.end(),
+                   [&](const LibraryText& l) { return l.spec == lib.spec; }))
+    libraries_read_.push_back(lib);
   library_of_[p] = path;
   if (merged.contains("library"))
     throw InputError(path, "library", "a library file cannot itself refer to a library material");
@@ -1209,7 +1238,8 @@ Scene SceneReader::read(const toml::table& root) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& text, const std::string& file_label, const std::vector<std::string>& overrides) {
+Scene parse_scene(const std::string& text, const std::string& file_label, const std::vector<std::string>& overrides,
+                  const std::vector<LibraryText>* libraries) {
   toml::table root;
   try {
     root = toml::parse(text, file_label);
@@ -1223,7 +1253,11 @@ Scene parse_scene(const std::string& text, const std::string& file_label, const 
   std::map<std::string, std::string> set_by;
   for (const auto& o : overrides) set_by[apply_override(root, o, file_label)] = o;
 
-  Scene scene = SceneReader(file_label, set_by).read(root);
+  SceneReader reader(file_label, set_by, libraries);
+  Scene scene = reader.read(root);
+  scene.source_text = text;
+  scene.overrides = overrides;
+  scene.libraries = reader.libraries_read();
 
   // Scene::text is the file as written (comments kept, so it re-parses to the
   // same material order) followed by a comment block listing the overrides.

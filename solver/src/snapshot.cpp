@@ -14,6 +14,9 @@
 namespace rubble {
 namespace {
 
+// Bumped whenever the restart group changes incompatibly.
+constexpr int kRestartFormat = 1;
+
 // ---- errors ----------------------------------------------------------------
 
 // While alive, HDF5 does not print its error stack to stderr: failures are
@@ -254,6 +257,108 @@ void read_dataset(hid_t h5file, const std::string& file, const std::string& name
   }
 }
 
+// ---- the restart group -------------------------------------------------------------
+
+void write_int64_list(hid_t loc, const std::string& file, const char* name, const std::vector<std::int64_t>& v) {
+  const std::string where = std::string("'") + name + "'";
+  hsize_t dims[1] = {v.size()};
+  Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose, file, "H5Screate_simple(" + where + ")");
+  Handle dset(H5Dcreate2(loc, name, H5T_NATIVE_INT64, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+              file, "H5Dcreate2(" + where + ")");
+  if (!v.empty())
+    check(H5Dwrite(dset.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dwrite(" + where + ")");
+}
+
+std::vector<std::int64_t> read_int64_list(hid_t loc, const std::string& file, const char* name) {
+  const std::string where = std::string("'") + name + "'";
+  Handle dset(H5Dopen2(loc, name, H5P_DEFAULT), H5Dclose, file, "H5Dopen2(" + where + ")");
+  Handle space(H5Dget_space(dset.get()), H5Sclose, file, "H5Dget_space(" + where + ")");
+  if (H5Sget_simple_extent_ndims(space.get()) != 1) fail(file, "reading " + where, "expected a 1-D dataset");
+  hsize_t dims[1] = {0};
+  check(H5Sget_simple_extent_dims(space.get(), dims, nullptr), file, "H5Sget_simple_extent_dims(" + where + ")");
+  std::vector<std::int64_t> v(dims[0]);
+  if (!v.empty())
+    check(H5Dread(dset.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dread(" + where + ")");
+  return v;
+}
+
+template <int D>
+void write_restart_group(hid_t h5, const std::string& file, const ParticleStore<D>& ps, const RestartState& r) {
+  Handle g(H5Gcreate2(h5, "restart", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, file, "H5Gcreate2('restart')");
+  const int format = kRestartFormat, checkpoint = r.checkpoint ? 1 : 0;
+  write_attr(g.get(), file, "format", H5T_NATIVE_INT, &format);
+  write_attr(g.get(), file, "dt_proposal", H5T_NATIVE_DOUBLE, &r.dt_proposal);
+  write_attr(g.get(), file, "next_output", H5T_NATIVE_DOUBLE, &r.next_output);
+  write_attr(g.get(), file, "next_snapshot", H5T_NATIVE_INT, &r.next_snapshot);
+  write_attr(g.get(), file, "checkpoint", H5T_NATIVE_INT, &checkpoint);
+  write_string_attr(g.get(), file, "scene_file", r.scene_file);
+  write_string_attr(g.get(), file, "scene_source", r.scene_source);
+  const int n_overrides = static_cast<int>(r.overrides.size()), n_libraries = static_cast<int>(r.libraries.size());
+  write_attr(g.get(), file, "overrides", H5T_NATIVE_INT, &n_overrides);
+  for (int i = 0; i < n_overrides; ++i)
+    write_string_attr(g.get(), file, ("override_" + std::to_string(i)).c_str(), r.overrides[i]);
+  write_attr(g.get(), file, "libraries", H5T_NATIVE_INT, &n_libraries);
+  for (int i = 0; i < n_libraries; ++i) {
+    const std::string k = "library_" + std::to_string(i);
+    write_string_attr(g.get(), file, (k + "_spec").c_str(), r.libraries[i].spec);
+    write_string_attr(g.get(), file, (k + "_path").c_str(), r.libraries[i].path);
+    write_string_attr(g.get(), file, (k + "_text").c_str(), r.libraries[i].text);
+  }
+  write_int64_list(g.get(), file, "body_first_id", r.body_first_id);
+  // the allocated fields the snapshot proper leaves out
+  for (const auto& f : field_table<D>()) {
+    if (f.snapshot) continue;
+    std::visit(
+        [&](auto member) {
+          const auto& arr = ps.*member;
+          if (!arr.empty()) write_dataset(g.get(), file, std::string(f.name), f.unit, arr);
+        },
+        f.member);
+  }
+}
+
+// Reads the fields of the field table found at `loc` whose `snapshot` flag
+// is `snapshot_fields` into `out`; `n` as in read_dataset.
+template <int D>
+void read_fields(hid_t loc, const std::string& path, bool snapshot_fields, ParticleStore<D>& out, long long& n) {
+  for (const auto& f : field_table<D>()) {
+    if (f.snapshot != snapshot_fields) continue;
+    const std::string name(f.name);
+    const htri_t exists = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
+    if (exists < 0) fail(path, "H5Lexists('" + name + "')");
+    if (exists == 0) continue;
+    std::visit([&](auto member) { read_dataset(loc, path, name, out.*member, n); }, f.member);
+  }
+}
+
+RestartState read_restart_attributes(hid_t g, const std::string& path) {
+  RestartState r;
+  int format = 0, checkpoint = 0, n_overrides = 0, n_libraries = 0;
+  read_attr(g, path, "format", H5T_NATIVE_INT, &format);
+  if (format != kRestartFormat)
+    fail(path, "reading the restart group",
+         "restart format " + std::to_string(format) + ", this build reads format " + std::to_string(kRestartFormat));
+  read_attr(g, path, "dt_proposal", H5T_NATIVE_DOUBLE, &r.dt_proposal);
+  read_attr(g, path, "next_output", H5T_NATIVE_DOUBLE, &r.next_output);
+  read_attr(g, path, "next_snapshot", H5T_NATIVE_INT, &r.next_snapshot);
+  read_attr(g, path, "checkpoint", H5T_NATIVE_INT, &checkpoint);
+  r.checkpoint = checkpoint != 0;
+  r.scene_file = read_string_attr(g, path, "scene_file");
+  r.scene_source = read_string_attr(g, path, "scene_source");
+  read_attr(g, path, "overrides", H5T_NATIVE_INT, &n_overrides);
+  for (int i = 0; i < n_overrides; ++i)
+    r.overrides.push_back(read_string_attr(g, path, ("override_" + std::to_string(i)).c_str()));
+  read_attr(g, path, "libraries", H5T_NATIVE_INT, &n_libraries);
+  for (int i = 0; i < n_libraries; ++i) {
+    const std::string k = "library_" + std::to_string(i);
+    r.libraries.push_back({read_string_attr(g, path, (k + "_spec").c_str()),
+                           read_string_attr(g, path, (k + "_path").c_str()),
+                           read_string_attr(g, path, (k + "_text").c_str())});
+  }
+  r.body_first_id = read_int64_list(g, path, "body_first_id");
+  return r;
+}
+
 // ---- whole files -------------------------------------------------------------------
 
 template <int D>
@@ -278,6 +383,7 @@ void write_file(const std::string& file, const ParticleStore<D>& ps, const Snaps
         },
         f.member);
   }
+  if (meta.restartable) write_restart_group<D>(h5.get(), file, ps, meta.restart);
   h5.close(file, "H5Fclose");
 }
 
@@ -316,8 +422,12 @@ void write_snapshot(const std::string& path, const ParticleStore<D>& ps, const S
   }
 }
 
+namespace {
+
+// read_snapshot and read_restart: the snapshot fields, and with `restart`
+// the restart group too.
 template <int D>
-void read_snapshot(const std::string& path, ParticleStore<D>& ps, SnapshotMeta& meta) {
+void read_file(const std::string& path, ParticleStore<D>& ps, SnapshotMeta& meta, bool restart) {
   QuietHdf5 quiet;
   Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path, "H5Fopen");
 
@@ -337,19 +447,82 @@ void read_snapshot(const std::string& path, ParticleStore<D>& ps, SnapshotMeta& 
 
   ParticleStore<D> out;
   long long n = -1;
+  read_fields<D>(h5.get(), path, true, out, n);
+  const htri_t has_restart = H5Lexists(h5.get(), "restart", H5P_DEFAULT);
+  if (has_restart < 0) fail(path, "H5Lexists('restart')");
+  m.restartable = has_restart > 0;
+  if (restart) {
+    if (!m.restartable)
+      fail(path, "reading the restart data",
+           "the file has no 'restart' group (not a snapshot written by `rubble run`, or written before restarts existed)");
+    Handle g(H5Gopen2(h5.get(), "restart", H5P_DEFAULT), H5Gclose, path, "H5Gopen2('restart')");
+    read_fields<D>(g.get(), path, false, out, n);
+    m.restart = read_restart_attributes(g.get(), path);
+  }
+  out.n = n < 0 ? 0 : static_cast<std::size_t>(n);
+  h5.close(path, "H5Fclose");
+
+  m.dimension = D;
+  ps = std::move(out);
+  meta = std::move(m);
+}
+
+}  // namespace
+
+SnapshotMeta read_snapshot_meta(const std::string& path) {
+  QuietHdf5 quiet;
+  Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path, "H5Fopen");
+  SnapshotMeta m;
+  read_attr(h5.get(), path, "dimension", H5T_NATIVE_INT, &m.dimension);
+  read_attr(h5.get(), path, "time", H5T_NATIVE_DOUBLE, &m.time);
+  read_attr(h5.get(), path, "step", H5T_NATIVE_INT64, &m.step);
+  if (has_attr(h5.get(), path, "version")) m.version = read_string_attr(h5.get(), path, "version");
+  if (has_attr(h5.get(), path, "commit")) m.commit = read_string_attr(h5.get(), path, "commit");
+  if (has_attr(h5.get(), path, "scene")) m.scene_text = read_string_attr(h5.get(), path, "scene");
+  const htri_t has_restart = H5Lexists(h5.get(), "restart", H5P_DEFAULT);
+  if (has_restart < 0) fail(path, "H5Lexists('restart')");
+  m.restartable = has_restart > 0;
+  if (m.restartable) {
+    Handle g(H5Gopen2(h5.get(), "restart", H5P_DEFAULT), H5Gclose, path, "H5Gopen2('restart')");
+    m.restart = read_restart_attributes(g.get(), path);
+  }
+  h5.close(path, "H5Fclose");
+  return m;
+}
+
+template <int D>
+SnapshotSummary read_snapshot_summary(const std::string& path) {
+  QuietHdf5 quiet;
+  Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path, "H5Fopen");
+  SnapshotSummary out;
+  read_attr(h5.get(), path, "time", H5T_NATIVE_DOUBLE, &out.time);
   for (const auto& f : field_table<D>()) {
     if (!f.snapshot) continue;
     const std::string name(f.name);
     const htri_t exists = H5Lexists(h5.get(), name.c_str(), H5P_DEFAULT);
     if (exists < 0) fail(path, "H5Lexists('" + name + "')");
     if (exists == 0) continue;
-    std::visit([&](auto member) { read_dataset(h5.get(), path, name, out.*member, n); }, f.member);
+    Handle dset(H5Dopen2(h5.get(), name.c_str(), H5P_DEFAULT), H5Dclose, path, "H5Dopen2('" + name + "')");
+    Handle space(H5Dget_space(dset.get()), H5Sclose, path, "H5Dget_space('" + name + "')");
+    hsize_t dims[3] = {0, 1, 1};
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    if (rank < 1 || rank > 3) fail(path, "reading '" + name + "'", "unexpected rank " + std::to_string(rank));
+    check(H5Sget_simple_extent_dims(space.get(), dims, nullptr), path, "H5Sget_simple_extent_dims('" + name + "')");
+    out.n = static_cast<std::size_t>(dims[0]);
+    out.fields.emplace_back(name, static_cast<int>(rank == 1 ? 1 : rank == 2 ? dims[1] : dims[1] * dims[2]));
   }
-  out.n = n < 0 ? 0 : static_cast<std::size_t>(n);
   h5.close(path, "H5Fclose");
+  return out;
+}
 
-  ps = std::move(out);
-  meta = std::move(m);
+template <int D>
+void read_snapshot(const std::string& path, ParticleStore<D>& ps, SnapshotMeta& meta) {
+  read_file<D>(path, ps, meta, false);
+}
+
+template <int D>
+void read_restart(const std::string& path, ParticleStore<D>& ps, SnapshotMeta& meta) {
+  read_file<D>(path, ps, meta, true);
 }
 
 template <int D>
@@ -376,6 +549,8 @@ std::string snapshot_filename(const std::string& stem, int index) {
 #define RUBBLE_INSTANTIATE_SNAPSHOT(D)                                                                   \
   template void write_snapshot<D>(const std::string&, const ParticleStore<D>&, const SnapshotMeta&);   \
   template void read_snapshot<D>(const std::string&, ParticleStore<D>&, SnapshotMeta&);                \
+  template void read_restart<D>(const std::string&, ParticleStore<D>&, SnapshotMeta&);                 \
+  template SnapshotSummary read_snapshot_summary<D>(const std::string&);                               \
   template std::vector<std::pair<std::string, int>> snapshot_fields<D>(const ParticleStore<D>&);
 RUBBLE_INSTANTIATE_SNAPSHOT(1)
 RUBBLE_INSTANTIATE_SNAPSHOT(2)

@@ -1,9 +1,16 @@
 // The `rubble` program end to end: bad input exits non-zero with a message
 // naming the file and the key, before any output directory is touched; an
 // existing non-empty output directory is never overwritten.
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +18,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "rubble/io/snapshot.hpp"
 
 namespace fs = std::filesystem;
 
@@ -102,8 +111,55 @@ class Cli : public ::testing::Test {
     EXPECT_FALSE(fs::exists(dir_ / "out")) << "output directory created for a bad scene";
   }
 
+  // Start `rubble ARGS...` in the scratch directory without waiting
+  // (stdout and stderr to files); returns the child's pid.
+  pid_t spawn(const std::vector<std::string>& args) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (chdir(dir_.c_str()) != 0) _exit(127);
+      const int out = open("stdout.txt", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int err = open("stderr.txt", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, 1);
+      dup2(err, 2);
+      std::vector<char*> argv{const_cast<char*>(RUBBLE_BINARY)};
+      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      execv(RUBBLE_BINARY, argv.data());
+      _exit(127);
+    }
+    return pid;
+  }
+
+  // Wait for a spawned child; its exit code (-1 if a signal ended it).
+  Result wait_for(pid_t pid) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir_ / "stdout.txt");
+    r.err = slurp(dir_ / "stderr.txt");
+    return r;
+  }
+
+  // Wait (up to a minute) until `file` has at least `lines` lines.
+  bool wait_for_lines(const fs::path& file, int lines) {
+    for (int i = 0; i < 6000; ++i) {
+      const std::string text = slurp(file);
+      if (std::count(text.begin(), text.end(), '\n') >= lines) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+  }
+
   fs::path dir_;
 };
+
+// A 2-D gas that takes minutes to reach its end time: for stops.
+std::string long_scene() {
+  return replace(replace(replace(replace(kValid, "dimension = 1", "dimension = 2"), "end_time = 0.001", "end_time = 100.0"),
+                         "min = [0.0]\nmax = [1.0]\nspacing = 0.05", "min = [0.0, 0.0]\nmax = [1.0, 1.0]\nspacing = 0.02"),
+                 "interval = 0", "interval = 50.0");
+}
 
 TEST_F(Cli, HelpAndInfoExitZero) {
   Result r = rubble("--help");
@@ -199,6 +255,76 @@ TEST_F(Cli, RunsTinySceneIntoNewDirectory) {
   EXPECT_EQ(r.code, 0) << r.err;
   ASSERT_TRUE(fs::is_directory(dir_ / "fresh" / "run1"));
   EXPECT_FALSE(fs::is_empty(dir_ / "fresh" / "run1"));
+}
+
+// SIGTERM and SIGINT (real signals, issue #13): the current step ends, a
+// checkpoint is written, no temporary file stays, the message says how to
+// resume, the exit code is 4; resuming from the checkpoint runs on.
+TEST_F(Cli, SignalsStopCleanlyWithACheckpoint) {
+  write_scene("long.toml", long_scene());
+  for (const int sig : {SIGTERM, SIGINT}) {
+    const std::string out = sig == SIGTERM ? "term" : "int";
+    const pid_t pid = spawn({"run", "long.toml", "--quiet", "--out", out});
+    ASSERT_TRUE(wait_for_lines(dir_ / out / "conserved.csv", 4)) << "the run did not start";
+    kill(pid, sig);
+    const Result r = wait_for(pid);
+    EXPECT_EQ(r.code, 4) << r.err;
+    EXPECT_NE(r.err.find(sig == SIGTERM ? "stopped by SIGTERM" : "stopped by SIGINT"), std::string::npos) << r.err;
+    const std::string checkpoint = out + "/snapshot.checkpoint.h5";
+    EXPECT_NE(r.err.find("resume with: rubble run --restart " + checkpoint), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(dir_ / checkpoint));
+    for (const auto& e : fs::directory_iterator(dir_ / out))
+      EXPECT_NE(e.path().extension(), ".tmp") << e.path() << " left behind";
+  }
+  // resume the SIGTERM run to a nearer end
+  const rubble::SnapshotMeta meta = rubble::read_snapshot_meta((dir_ / "term" / "snapshot.checkpoint.h5").string());
+  EXPECT_TRUE(meta.restart.checkpoint);
+  EXPECT_GT(meta.step, 2);
+  const Result r = rubble("run --restart term/snapshot.checkpoint.h5 --quiet --set simulation.end_time=" +
+                          std::to_string(meta.time + 0.02));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "term" / "snapshot.0001.h5")) << "the final snapshot";
+}
+
+// --max-wall-time stops before the limit, with a checkpoint and exit code 4;
+// a malformed duration is a usage error naming the option.
+TEST_F(Cli, MaxWallTimeStopsBeforeTheLimit) {
+  write_scene("long.toml", long_scene());
+  const auto start = std::chrono::steady_clock::now();
+  const Result r = rubble("run long.toml --quiet --out w --max-wall-time 1.5");
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.err.find("stopped by the wall-time limit"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "w" / "snapshot.checkpoint.h5"));
+  EXPECT_LT(took, 1.5 + 1.0) << "process start-up and exit included";
+  for (const char* bad : {"0", "-5", "1:xx", "abc", "1:2:3:4"}) {
+    const Result b = rubble(std::string("run long.toml --out never --max-wall-time ") + bad);
+    EXPECT_EQ(b.code, 2) << bad << ": " << b.err;
+    EXPECT_NE(b.err.find("--max-wall-time"), std::string::npos) << b.err;
+    EXPECT_FALSE(fs::exists(dir_ / "never"));
+  }
+}
+
+// Resuming into the run's own directory would overwrite snapshots written
+// after the restart point: refused, naming the file; the new-directory
+// form works. SCENE and --restart together are a usage error.
+TEST_F(Cli, RestartRefusesToOverwriteLaterSnapshots) {
+  write_scene("tiny.toml", replace(kValid, "interval = 0", "interval = 0.0005"));
+  ASSERT_EQ(rubble("run tiny.toml --quiet --out a").code, 0);
+  const Result r = rubble("run --restart a/snapshot.0001.h5 --quiet");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("snapshot.0002.h5"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+  const Result ok = rubble("run --restart a/snapshot.0001.h5 --quiet --out b");
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_TRUE(fs::exists(dir_ / "b" / "snapshot.0002.h5"));
+  const Result both = rubble("run tiny.toml --restart a/snapshot.0001.h5 --out c");
+  EXPECT_EQ(both.code, 2) << both.err;
+  EXPECT_FALSE(fs::exists(dir_ / "c"));
+  const Result physics = rubble("run --restart a/snapshot.0001.h5 --out d --set materials.gas.gamma=1.6");
+  EXPECT_EQ(physics.code, 2) << physics.err;
+  EXPECT_NE(physics.err.find("materials.gas.gamma"), std::string::npos) << physics.err;
+  EXPECT_FALSE(fs::exists(dir_ / "d"));
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 
 using namespace rubble;
@@ -128,4 +129,27 @@ max = [0.5, 1.0]  # the open y bounds are not used
   EXPECT_LT(ymin, 0.0125);                 // both surfaces moved out of the initial lattice
   EXPECT_GT(ymax, 0.4875);
   EXPECT_NEAR(ymin + ymax, 0.5, 1e-10);    // and symmetrically
+}
+
+// simulation.dt_min bounds the step the physics allows, whatever the output
+// interval (issue #13 item 4): with outputs closer together than dt_min the
+// steps are cut to land on them, which is not a collapse, but a stable step
+// below dt_min is, and the run stops naming it.
+TEST(Run, DtMinIsEnforcedWhateverTheOutputInterval) {
+  const std::string base = uniform_gas_scene(1, "leapfrog", "summation", "cubic");
+  // the stable step here is ~0.3 * 0.024 / 1.18 ~ 6e-3
+  const std::string fine_output = base + "[output]\ninterval = 0.001\n";
+  EXPECT_NO_THROW(run_scene(parse_scene(fine_output, "t.toml", {"simulation.dt_min=1e-4"}), in_memory()));
+  try {
+    run_scene(parse_scene(fine_output, "t.toml", {"simulation.dt_min=0.01"}), in_memory());
+    ADD_FAILURE() << "a stable step below dt_min must stop the run";
+  } catch (const RunError& e) {
+    EXPECT_NE(std::string(e.what()).find("dt_min = 0.01"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at t = "), std::string::npos) << e.what();
+  }
+  for (const char* integrator : {"leapfrog", "rk2_adaptive"}) {
+    const std::string coarse = uniform_gas_scene(1, integrator, "summation", "cubic");
+    EXPECT_THROW(run_scene(parse_scene(coarse, "t.toml", {"simulation.dt_min=0.02"}), in_memory()), RunError)
+        << integrator;
+  }
 }

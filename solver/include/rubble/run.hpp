@@ -15,8 +15,12 @@ namespace rubble {
 // is parsed as TOML (so 0.5, true, "text", [1, 2] all work).
 // Throws InputError naming the file, the key and the problem.
 Scene load_scene_file(const std::string& path, const std::vector<std::string>& overrides = {});
+// `libraries`: when given, `library = SPEC` is resolved from this list
+// (by spec) instead of the disk: how a run resumes from a snapshot with the
+// library values it started with (an unlisted spec is an error).
 Scene parse_scene(const std::string& text, const std::string& file_label,
-                  const std::vector<std::string>& overrides = {});
+                  const std::vector<std::string>& overrides = {},
+                  const std::vector<LibraryText>* libraries = nullptr);
 
 // Where the particles live and the right-hand side is evaluated. `cpu`
 // (OpenMP) is always built; `cuda` only with -DRUBBLE_CUDA=ON.
@@ -41,7 +45,33 @@ struct RunOptions {
   bool progress = false;      // progress bar (terminal) or plain lines
   bool quiet = false;         // no progress output at all
   Backend backend = default_backend();
+  // Resume from this snapshot (issue #13; `rubble run --restart`): the scene
+  // must be load_restart_scene()'s of the same file. Empty: a fresh run.
+  std::string restart_from = {};
+  // Stop cleanly, with a checkpoint, before this much wall time has passed
+  // since the run began (0: no limit).
+  double max_wall_seconds = 0;
+  // Also write the checkpoint NAME.checkpoint.h5 every so many wall-clock
+  // seconds (0: never).
+  double checkpoint_every_seconds = 0;
 };
+
+// Exit status of `rubble run` when a run stopped early with a checkpoint
+// (a signal, --max-wall-time); docs/user-guide.md lists all exit codes.
+inline constexpr int kExitStopped = 4;
+
+// The scene a snapshot was written under, for resuming from it: the scene
+// text, --set overrides and library material files as the run read them at
+// its start, all carried by the snapshot, so nothing on disk changes a
+// resumed run. `extra_overrides` may only change simulation.end_time,
+// simulation.max_steps and output.* (the physics stays as it was); anything
+// else is an InputError, as is a snapshot without restart data.
+Scene load_restart_scene(const std::string& snapshot, const std::vector<std::string>& extra_overrides = {});
+
+// SIGINT and SIGTERM then ask a running run_scene to stop after its current
+// step with a checkpoint (FinalState::stopped); a second signal ends the
+// process at once. `rubble run` installs them; library users may.
+void install_stop_signal_handlers();
 
 // Final particle state, flattened (vector fields N x D, row-major).
 struct FinalState {
@@ -64,6 +94,11 @@ struct FinalState {
   // the identity was used, out of all particle evaluations of the run.
   std::int64_t correction_fallbacks = 0;
   std::int64_t particle_evaluations = 0;
+  // Why the run stopped before end_time ("SIGINT", "SIGTERM", "the wall-time
+  // limit"), or empty when it reached end_time; then `checkpoint` is the
+  // snapshot to resume from.
+  std::string stopped;
+  std::string checkpoint;
 };
 
 // Run the scene to its end time. Throws InputError for bad input found while

@@ -826,8 +826,9 @@ struct CudaStepper<D>::Impl {
 };
 
 template <int D>
-CudaStepper<D>::CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain)
+CudaStepper<D>::CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed)
     : impl_(std::make_unique<Impl>(scene, ps, domain)) {
+  if (resumed) return;
   impl_->sort_particles();
   impl_->evaluate();
 }

@@ -25,7 +25,9 @@ class CudaStepper {
  public:
   // Uploads ps, sorts along the space-filling curve and evaluates the
   // right-hand side once. Throws RunError for what the backend cannot run.
-  CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain);
+  // `resumed`: ps holds a restart snapshot's state, rates included: it is
+  // uploaded as it is, neither sorted nor evaluated again.
+  CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed = false);
   ~CudaStepper();
   CudaStepper(const CudaStepper&) = delete;
   CudaStepper& operator=(const CudaStepper&) = delete;

@@ -1,6 +1,7 @@
 #pragma once
 // Errors a user can act on. InputError names the file, the key and the
 // problem; the command-line program prints what() and exits non-zero.
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -23,5 +24,12 @@ class RunError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// A number for a message, as %g prints it (never "0.000000" for 1e-9).
+inline std::string fmt_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
 
 }  // namespace rubble

@@ -37,6 +37,12 @@ class ConservedLog {
   // Creates (truncates) `path` and writes the header. Throws
   // std::runtime_error naming the file if it cannot.
   ConservedLog(const std::string& path, int dimension);
+  // A resumed run (issue #13): `path` gets the header and the rows of
+  // `history` (a conserved.csv of the interrupted run, may be `path`
+  // itself or missing) up to and including step `last_step`, written
+  // atomically; later rows are appended. A history with another header is an
+  // error naming it.
+  ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step);
   void append(const ConservedRecord& r);
 
   // The header line for `dimension`, without the newline.

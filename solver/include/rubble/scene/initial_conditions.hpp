@@ -15,9 +15,11 @@ double lattice_cell_volume(Lattice lattice, double dx);
 // lattice, mass = density * cell volume, velocity, internal energy (from the
 // pressure through the material's EOS if pressure is given), density, and
 // h = hfact (m/rho)^(1/D). Throws InputError if a body yields no particle or
-// a non-finite value.
+// a non-finite value. Returns where each body's particle ids begin: body k
+// holds ids [first[k], first[k + 1]) (size: bodies + 1).
 template <int D>
-void generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs, ParticleStore<D>& ps);
+std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
+                                          ParticleStore<D>& ps);
 
 // The domain box from [domain]: periodic axes get their bounds.
 template <int D>

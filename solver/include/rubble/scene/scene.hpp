@@ -224,9 +224,22 @@ struct GravityConfig {
   int group_size = 32;                                 // particles sharing one tree walk (tuning)
 };
 
+// A library material file as the scene read it: `spec` is the value of
+// `library = ...`, `path` the file it resolved to, `text` its content.
+// Snapshots carry these, so a resumed run uses the values the run started
+// with, whatever the library on disk holds by then.
+struct LibraryText {
+  std::string spec;
+  std::string path;
+  std::string text;
+};
+
 struct Scene {
   std::string file;     // where it came from (for messages)
   std::string text;     // full scene text after --set overrides (stored in snapshots)
+  std::string source_text;               // the scene file as read, before overrides
+  std::vector<std::string> overrides;    // the --set overrides, in order
+  std::vector<LibraryText> libraries;    // the library files the materials came from
   SimulationConfig simulation;
   std::vector<MaterialConfig> materials;
   std::vector<BodyConfig> bodies;
