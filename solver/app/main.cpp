@@ -146,7 +146,8 @@ int run_command(const RunArgs& args) {
       claim_output_directory(out);
     }
   }
-  fs::create_directories(out);
+  // the run makes the directory once the scene and its initial state have
+  // passed every check, so bad input leaves none behind
 
   options.out_dir = out.string();
   options.write_output = true;

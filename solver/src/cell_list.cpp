@@ -83,9 +83,11 @@ void CellList<D>::build(const Vec<D>* x, const Real* H, std::size_t n, const Box
     if (!(H[i] >= Real(0)) || !std::isfinite(H[i])) bad_h = std::min(bad_h, i);
     else h_max = std::max(h_max, H[i]);
   }
-  if (bad_x < n) fail("particle " + std::to_string(bad_x) + " has a non-finite position");
+  // (the index is the caller's array index; the run names the particle
+  // itself by body and original index)
+  if (bad_x < n) fail("array index " + std::to_string(bad_x) + " has a non-finite position");
   if (bad_h < n)
-    fail("particle " + std::to_string(bad_h) + " has support radius H = " + str(H[bad_h]) +
+    fail("array index " + std::to_string(bad_h) + " has support radius H = " + str(H[bad_h]) +
          "; it must be finite and >= 0");
   // With H <= L/2 the minimum image is the only image within reach, so each
   // pair is found once and none is missed, however few H fit in L.

@@ -110,7 +110,7 @@ void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius) {
     cells_.build(ps_.x.data(), search_radius.data(), ps_.n, box);
   } catch (const std::invalid_argument& e) {
     // e.g. a smoothing length that grew past half a periodic length
-    throw RunError(e.what());
+    throw RunError(std::string("the neighbour search failed (") + e.what() + ")");
   }
   cells_.find_neighbors(nbrs_);
   ++rebuilds_;

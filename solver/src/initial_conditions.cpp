@@ -178,7 +178,11 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
                                                                          Real(alpha0 * b.pressure))
                                      : b.internal_energy;
     if (!std::isfinite(u) || u < 0)
-      throw InputError(scene.file, key, "initial internal energy is not finite and non-negative");
+      throw b.pressure >= 0
+          ? InputError(scene.file, key + ".density",
+                       "the initial internal energy that gives pressure = " + fmt_g(b.pressure) + " at density = " +
+                           fmt_g(b.density) + " is " + fmt_g(u) + ", not finite and >= 0: is the density physical?")
+          : InputError(scene.file, key + ".internal_energy", "is " + fmt_g(u) + ", must be finite and >= 0");
     for (const Vec<D>& x : body_points[i]) {
       ps.x[next] = x;
       for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);

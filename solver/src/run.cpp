@@ -19,6 +19,7 @@
 #include "cuda/cuda_stepper.hpp"
 #endif
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/state_check.hpp"
 #include "rubble/gravity/device_gravity.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
@@ -119,9 +120,12 @@ class OutputWriter {
     return (dir_ / name).string();
   }
 
-  // A snapshot of the state that stopped the run, beside the regular ones.
-  void diagnostic(const ParticleStore<D>& ps, double t, std::int64_t step) {
-    if (enabled_) write_file(ps, t, step, scene_.output.name + ".failed.h5", std::nullopt);
+  // NAME.failed.h5, beside the regular snapshots: the state of a run that
+  // could not go on. Returns its path ("" without output).
+  std::string diagnostic(const ParticleStore<D>& ps, double t, std::int64_t step) {
+    if (!enabled_) return {};
+    write_file(ps, t, step, scene_.output.name + ".failed.h5", std::nullopt);
+    return (dir_ / (scene_.output.name + ".failed.h5")).string();
   }
 
   // Wall seconds the slowest snapshot write took so far.
@@ -226,6 +230,16 @@ class CpuStepper {
     return measure_conserved<D>(ps_, t, step, dt, g_);
   }
   const ParticleStore<D>& host() { return ps_; }  // the state, on the host
+  // The state check's last good state: a copy of the snapshot fields
+  // (about a tenth of the store) taken before each step, written to
+  // NAME.failed.h5 when the step fails.
+  void keep_good() {
+    good_.n = ps_.n;
+    for (const auto& f : field_table<D>())
+      if (f.snapshot) std::visit([&](auto member) { good_.*member = ps_.*member; }, f.member);
+  }
+  const ParticleStore<D>& last_good() const { return good_; }
+  static constexpr bool keeps_last_good = true;
   std::size_t size() const { return ps_.n; }
   std::int64_t bytes_downloaded() const { return 0; }  // the state never leaves the host
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
@@ -235,15 +249,96 @@ class CpuStepper {
 
  private:
   ParticleStore<D>& ps_;
+  ParticleStore<D> good_;  // keep_good()
   HydroCpu<D> sys_;
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity (its potential energy)
 };
 
+// "particle 17 of bodies[1] (id 417) at x = (0.1, 0.2)": a particle as the
+// user knows it, by body and original index, never by its sorted index.
+template <int D>
+std::string describe_particle(const ParticleStore<D>& ps, std::size_t i, const std::vector<std::int64_t>& body_first) {
+  const std::int64_t id = ps.id.empty() ? std::int64_t(i) : ps.id[i];
+  std::size_t body = 0;
+  while (body + 2 < body_first.size() && id >= body_first[body + 1]) ++body;
+  const std::int64_t first = body_first.empty() ? 0 : body_first[body];
+  std::string text = "particle " + std::to_string(id - first) + " of bodies[" + std::to_string(body) + "] (id " +
+                     std::to_string(id) + ") at x = (";
+  for (int k = 0; k < D; ++k) text += (k ? ", " : "") + fmt_g(ps.x[i][k]);
+  return text + ")";
+}
+
+// The faulty field's value(s) of particle i, e.g. "rho = -3.2".
+template <int D>
+std::string fault_value(const ParticleStore<D>& ps, std::size_t i, int fault) {
+  auto vec = [&](const Vec<D>& v) {
+    std::string t = "(";
+    for (int k = 0; k < D; ++k) t += (k ? ", " : "") + fmt_g(v[k]);
+    return t + ")";
+  };
+  switch (fault) {
+    case kFaultPosition: return "x = " + vec(ps.x[i]);
+    case kFaultVelocity: return "v = " + vec(ps.v[i]);
+    case kFaultDensity: return "rho = " + fmt_g(ps.rho[i]);
+    case kFaultSmoothingLength: return "h = " + fmt_g(ps.h[i]);
+    case kFaultInternalEnergy: return "u = " + fmt_g(ps.u[i]);
+    case kFaultPressure: return "p = " + fmt_g(ps.p[i]);
+    case kFaultSoundSpeed: return "cs = " + fmt_g(ps.cs[i]);
+    case kFaultDistention: return "alpha = " + fmt_g(ps.alpha[i]);
+    case kFaultPlasticStrain: return "eps_p = " + fmt_g(ps.eps_p[i]);
+    case kFaultInelasticVolume: return "eps_v = " + fmt_g(ps.eps_v[i]);
+    case kFaultAcceleration: return "dvdt = " + vec(ps.dvdt[i]);
+    case kFaultEnergyRate: return "dudt = " + fmt_g(ps.dudt[i]);
+    case kFaultDensityRate: return "drhodt = " + fmt_g(ps.drhodt[i]);
+    default: return std::string(state_fault_field(fault)) + " not finite";
+  }
+}
+
+// The first particle of `ps` that fails the state check, described; empty
+// if none does.
+template <int D>
+std::string first_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first, int* fault_out = nullptr,
+                        std::size_t* index_out = nullptr) {
+  const StoreView<D> s = const_cast<ParticleStore<D>&>(ps).view();  // read only
+  for (std::size_t i = 0; i < ps.n; ++i) {
+    const int fault = particle_fault<D>(s, std::uint32_t(i));
+    if (fault == kStateOk) continue;
+    if (fault_out) *fault_out = fault;
+    if (index_out) *index_out = i;
+    return std::string("invalid ") + state_fault_field(fault) + " (" + fault_value<D>(ps, i, fault) + "; must be " +
+           state_fault_requirement(fault) + ") in " + describe_particle<D>(ps, i, body_first);
+  }
+  return {};
+}
+
+// The initial state (before anything is written): a failing particle is
+// bad input, named by its body's key that set the faulty value.
+template <int D>
+void check_initial_state(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first) {
+  int fault = kStateOk;
+  std::size_t i = 0;
+  const std::string what = first_fault<D>(ps, body_first, &fault, &i);
+  if (what.empty()) return;
+  const std::int64_t id = ps.id[i];
+  std::size_t body = 0;
+  while (body + 2 < body_first.size() && id >= body_first[body + 1]) ++body;
+  const BodyConfig& b = scene.bodies[body];
+  std::string key = "bodies[" + std::to_string(body) + "]";
+  if (fault == kFaultVelocity) key += ".velocity";
+  else if (fault == kFaultPosition) key += b.shape == BodyShape::Box ? ".max" : ".center";
+  else if (fault == kFaultInternalEnergy) key += b.pressure >= 0 ? ".pressure" : ".internal_energy";
+  else if (b.shape != BodyShape::Polytrope) key += ".density";
+  else key += ".mass";
+  throw InputError(scene.file, key, "the initial state is unusable: " + what);
+}
+
 template <int D, class Stepper>
 FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, const LoopStart& start,
-                    std::vector<std::int64_t> body_first, std::chrono::steady_clock::time_point wall_start) {
+                    const std::vector<std::int64_t>& body_first, std::chrono::steady_clock::time_point wall_start) {
   const SimulationConfig& sim = scene.simulation;
-  OutputWriter<D> out(scene, opt, start, std::move(body_first));
+  // the first evaluation's p, c_s and rates, before anything is written
+  if (!start.resumed && sys.first_non_finite() < sys.size()) check_initial_state<D>(scene, sys.host(), body_first);
+  OutputWriter<D> out(scene, opt, start, body_first);
   Progress progress(sim.end_time, opt.progress && !opt.quiet);
   const double t_end = sim.end_time;
   const double dt_min = sim.dt_min > 0 ? sim.dt_min : 1e-12 * t_end;
@@ -271,13 +366,35 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   double next_checkpoint = opt.checkpoint_every_seconds > 0 ? last_wall + opt.checkpoint_every_seconds : 0;
   std::string stopped, checkpoint;
 
+  // A step that failed: the last good state (the CPU backend keeps one;
+  // on the CUDA backend, the failing state) goes to NAME.failed.h5, and the
+  // message names what failed, in which particle, when.
+  double good_t = t;
+  std::int64_t good_step = step;
+  auto fail = [&](const std::string& what) {
+    const std::string detail = first_fault<D>(sys.host(), body_first);
+    std::string where;
+    if constexpr (Stepper::keeps_last_good) {
+      const std::string file = out.diagnostic(sys.last_good(), good_t, good_step);
+      if (!file.empty())
+        where = "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) + ") is in " + file;
+    } else {
+      const std::string file = out.diagnostic(sys.host(), t, step);
+      if (!file.empty()) where = "; the state at the failure is in " + file;
+    }
+    return RunError(what + (detail.empty() ? "" : ": " + detail) + where);
+  };
+
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
   while (t < t_end * (1 - 1e-12)) {
     if (step >= sim.max_steps)
-      throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t));
+      throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t) + " s");
     // Sorting permutes every field, rates included, so the state needs no
     // new evaluation; neighbour lists are rebuilt at each evaluation anyway.
     if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
+    sys.keep_good();
+    good_t = t;
+    good_step = step;
     const double limit = sys.dt_limit();
     double dt = std::min(limit, loop.next_output - t);
     // the step the physics allows, before it is shortened to land on an
@@ -285,15 +402,20 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     double dt_physics = limit;
     const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
     if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
-    if (sim.integrator == Integrator::Leapfrog) {
-      sys.leapfrog(dt);
-    } else {
-      dt_physics = std::min(limit, loop.dt_proposal);
-      dt = std::min(dt, loop.dt_proposal);
-      const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
-      if (r.rejections > 0) dt_physics = std::min(dt_physics, double(r.dt_taken));  // error control cut it
-      dt = r.dt_taken;
-      loop.dt_proposal = r.dt_next;
+    try {
+      if (sim.integrator == Integrator::Leapfrog) {
+        sys.leapfrog(dt);
+      } else {
+        dt_physics = std::min(limit, loop.dt_proposal);
+        dt = std::min(dt, loop.dt_proposal);
+        const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
+        if (r.rejections > 0) dt_physics = std::min(dt_physics, double(r.dt_taken));  // error control cut it
+        dt = r.dt_taken;
+        loop.dt_proposal = r.dt_next;
+      }
+    } catch (const RunError& e) {
+      // inside the step: the neighbour search or the smoothing-length iteration
+      throw fail(std::string(e.what()) + " in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s");
     }
     t += dt;
     ++step;
@@ -302,16 +424,13 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
 
     // checked where the state lives (a device reduction on the CUDA backend):
     // the host copy is fetched only for a snapshot, a diagnostic or the end
-    const std::size_t bad = sys.first_non_finite();
-    if (bad < sys.size()) {
-      out.diagnostic(sys.host(), t, step);
-      throw RunError("non-finite value in particle " + std::to_string(bad) + " at t = " + fmt_g(t) + " (step " +
-                     std::to_string(step) + "); diagnostic snapshot written");
-    }
+    if (sys.first_non_finite() < sys.size())
+      throw fail("the state check failed at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")");
     if (dt_physics < dt_min && t < t_end * (1 - 1e-12)) {
-      out.diagnostic(sys.host(), t, step);
+      const std::string file = out.diagnostic(sys.host(), t, step);
       throw RunError("time step collapsed to " + fmt_g(dt_physics) + " s < dt_min = " + fmt_g(dt_min) +
-                     " s at t = " + fmt_g(t) + " (step " + std::to_string(step) + "); diagnostic snapshot written");
+                     " s at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")" +
+                     (file.empty() ? "" : "; the state is in " + file));
     }
     if (out.enabled()) out.log(sys.conserved(t, step, dt));
     progress.update(t, dt, step);
@@ -405,6 +524,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   std::vector<std::int64_t> body_first;
   if (opt.restart_from.empty()) {
     body_first = generate_bodies<D>(scene, hfact, needs, ps);
+    check_initial_state<D>(scene, ps, body_first);  // x, v, rho, h, u as generated
   } else {
     SnapshotMeta meta;
     read_restart<D>(opt.restart_from, ps, meta);
@@ -434,14 +554,23 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
 
   const Box<D> domain = domain_from_scene<D>(scene);
   check_periodic_room<D>(scene, domain, ps);
+  // The first evaluation runs in the stepper's constructor: a state it
+  // cannot evaluate is bad input.
+  auto initial = [&](auto make) {
+    try {
+      return make();
+    } catch (const RunError& e) {
+      throw InputError(scene.file, "bodies", std::string("the initial state cannot be evaluated: ") + e.what());
+    }
+  };
 #ifdef RUBBLE_HAVE_CUDA
   if (opt.backend == Backend::Cuda) {
-    CudaStepper<D> sys(scene, ps, domain, start.resumed);
-    return run_loop<D>(scene, opt, sys, start, std::move(body_first), wall_start);
+    auto sys = initial([&] { return std::make_unique<CudaStepper<D>>(scene, ps, domain, start.resumed); });
+    return run_loop<D>(scene, opt, *sys, start, body_first, wall_start);
   }
 #endif
-  CpuStepper<D> sys(scene, ps, domain, start.resumed);
-  return run_loop<D>(scene, opt, sys, start, std::move(body_first), wall_start);
+  auto sys = initial([&] { return std::make_unique<CpuStepper<D>>(scene, ps, domain, start.resumed); });
+  return run_loop<D>(scene, opt, *sys, start, body_first, wall_start);
 }
 
 }  // namespace

@@ -327,4 +327,38 @@ TEST_F(Cli, RestartRefusesToOverwriteLaterSnapshots) {
   EXPECT_FALSE(fs::exists(dir_ / "d"));
 }
 
+// The initial state is checked before anything is written: a density that
+// overflows or underflows is refused naming bodies[k].density (issue #13).
+TEST_F(Cli, UnusableInitialStateIsRefused) {
+  for (const char* density : {"1e308", "1e-320"}) {
+    write_scene("extreme.toml", replace(kValid, "density = 1.0", std::string("density = ") + density));
+    const Result r = rubble("run extreme.toml --quiet");
+    EXPECT_EQ(r.code, 2) << density << ": " << r.err;
+    EXPECT_NE(r.err.find("key 'bodies[0].density'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "an output directory was made for a refused scene";
+  }
+}
+
+// A step that fails (here: continuity density driven negative by a split
+// at 100 m/s in a cold gas, whose Courant step ignores expansion) stops with
+// exit code 3 and a message naming the field, the particle by body and
+// original index, its position, the time and step; NAME.failed.h5 holds
+// the last good state.
+TEST_F(Cli, FailedStepNamesTheParticleAndKeepsTheLastGoodState) {
+  std::string split = replace(replace(kValid, "end_time = 0.001", "end_time = 1.0\nintegrator = \"leapfrog\"\ndensity = \"continuity\""),
+                              "max = [1.0]", "max = [0.5]");
+  split = replace(split, "pressure = 1.0", "internal_energy = 1e-6\nvelocity = [-100.0]");
+  split += "[[bodies]]\nshape = \"box\"\nmaterial = \"gas\"\nmin = [0.5]\nmax = [1.0]\nspacing = 0.05\n"
+           "density = 1.0\ninternal_energy = 1e-6\nvelocity = [100.0]\n";
+  write_scene("split.toml", split);
+  const Result r = rubble("run split.toml --quiet");
+  EXPECT_EQ(r.code, 3) << r.err;
+  for (const char* part : {"invalid rho", "must be finite and > 0", "of bodies[0] (id ", "at x = (", "from t = 0 s",
+                           "step 1", "the last good state (t = 0 s, step 0) is in out/split/snapshot.failed.h5"})
+    EXPECT_NE(r.err.find(part), std::string::npos) << "stderr lacks '" << part << "': " << r.err;
+  const rubble::SnapshotMeta failed = rubble::read_snapshot_meta((dir_ / "out" / "split" / "snapshot.failed.h5").string());
+  EXPECT_EQ(failed.step, 0);
+  EXPECT_FALSE(failed.restartable) << "a diagnostic is not a restart point";
+}
+
 }  // namespace

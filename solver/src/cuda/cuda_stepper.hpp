@@ -40,6 +40,10 @@ class CudaStepper {
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   const ParticleStore<D>& host();  // downloads the device state into ps
+  // The state check's last good state is not kept on the device (it would
+  // cost a copy of the store): a failed step writes the failing state.
+  void keep_good() {}
+  static constexpr bool keeps_last_good = false;
   std::size_t size() const;        // the particle count (no download)
   std::int64_t bytes_downloaded() const;  // device-to-host bytes of host() so far
   std::int64_t correction_fallbacks() const;

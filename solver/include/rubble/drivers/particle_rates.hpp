@@ -12,6 +12,7 @@
 #include "rubble/core/box.hpp"
 #include "rubble/core/hd.hpp"
 #include "rubble/drivers/material_params.hpp"
+#include "rubble/drivers/state_check.hpp"
 #include "rubble/particles/store_view.hpp"
 #include "rubble/physics/artificial_stress.hpp"
 #include "rubble/physics/hydro.hpp"
@@ -452,15 +453,6 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
     dt = dt_a < dt ? dt_a : dt;
   }
   return dt;
-}
-
-// Whether particle a's evolved state is finite (the run stops otherwise).
-template <int D>
-RUBBLE_HD_INLINE bool finite_particle(const StoreView<D>& s, std::uint32_t a) {
-  bool ok = std::isfinite(s.u[a]) && std::isfinite(s.rho[a]) && std::isfinite(s.h[a]);
-  if (s.alpha) ok = ok && std::isfinite(s.alpha[a]);
-  for (int k = 0; k < D; ++k) ok = ok && std::isfinite(s.x[a][k]) && std::isfinite(s.v[a][k]);
-  return ok;
 }
 
 }  // namespace rubble
