@@ -9,7 +9,8 @@
 // Exit codes: 0 success, 1 unexpected error, 2 bad input or usage (the scene,
 // the options, an output directory that would be overwritten), 3 a run that
 // could not go on (RunError), 4 a run stopped early with a checkpoint to
-// resume from (SIGINT, SIGTERM, --max-wall-time).
+// resume from (SIGINT, SIGTERM, --max-wall-time), 5 output that could not be
+// written (OutputError: the OS's reason is in the message).
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,6 +32,7 @@
 #include "rubble/core/real.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
+#include "rubble/scene/initial_conditions.hpp"
 #include "rubble/scene/materials.hpp"
 
 #ifndef RUBBLE_VERSION
@@ -238,6 +240,11 @@ std::string regime_label(const rubble::EosState& s) {
 int eos_command(const EosArgs& args) {
   const std::vector<double> rho = parse_range(args.rho, "--rho", false);
   const std::vector<double> u = parse_range(args.u, "--u", true);
+  constexpr double kMaxRows = 1e7;  // ~1 GB of CSV: more is a mistake, not a table
+  if (double(rho.size()) * double(u.size()) > kMaxRows)
+    throw rubble::InputError("--rho/--u", "",
+                             std::to_string(rho.size()) + " x " + std::to_string(u.size()) +
+                                 " states is more than the 1e7 rows a table may have; use fewer points");
   const rubble::MaterialConfig m = rubble::load_material(args.material, args.sets);
   const rubble::EosParams eos = rubble::eos_params_from_material(m);
   const bool csv = args.format == "csv";
@@ -251,15 +258,27 @@ int eos_command(const EosArgs& args) {
     else std::printf("# units: %s\n", m.units.c_str());
     std::printf("%15s %15s %15s %15s  %s\n", "rho", "u", "p", "c_s", "regime");
   }
+  long nonfinite = 0;
   for (double r : rho)
     for (double e : u) {
       const rubble::EosState s = rubble::eos_evaluate(eos, rubble::Real(r), rubble::Real(e));
-      const double cs = std::sqrt(std::max(double(s.c2), 0.0));
+      const double cs = s.c2 > 0 ? std::sqrt(double(s.c2)) : std::isnan(double(s.c2)) ? double(s.c2) : 0.0;
+      std::string label = regime_label(s);
+      // a state outside the EOS's range of numbers is flagged, never silent
+      if (!std::isfinite(double(s.p)) || !std::isfinite(cs)) {
+        label += "+NONFINITE";
+        ++nonfinite;
+      }
       if (csv)
-        std::printf("%.17g,%.17g,%.17g,%.17g,%s\n", r, e, double(s.p), cs, regime_label(s).c_str());
+        std::printf("%.17g,%.17g,%.17g,%.17g,%s\n", r, e, double(s.p), cs, label.c_str());
       else
-        std::printf("%15.7e %15.7e %15.7e %15.7e  %s\n", r, e, double(s.p), cs, regime_label(s).c_str());
+        std::printf("%15.7e %15.7e %15.7e %15.7e  %s\n", r, e, double(s.p), cs, label.c_str());
     }
+  if (nonfinite > 0)
+    std::fprintf(stderr,
+                 "rubble: warning: %ld of %zu states give a non-finite pressure or sound speed (marked +NONFINITE): "
+                 "outside the range of numbers this EOS can represent\n",
+                 nonfinite, rho.size() * u.size());
   return std::fflush(stdout) == 0 ? 0 : 1;
 }
 
@@ -276,7 +295,11 @@ int info_command() {
             << " (built without OpenMP)"
 #endif
             << "\n"
-            << "GPU seen:        " << rubble::gpu_description() << "\n";
+            << "GPU seen:        " << rubble::gpu_description() << "\n"
+            << "memory free:     "
+            << (rubble::available_memory_bytes() > 0 ? rubble::format_bytes(rubble::available_memory_bytes())
+                                                     : std::string("unknown"))
+            << " (a run refuses a scene whose estimate exceeds it; RUBBLE_MEMORY_LIMIT overrides)\n";
   return 0;
 }
 
@@ -327,6 +350,14 @@ int main(int argc, char** argv) {
                   "Override a material key, e.g. --set tillotson.A=3e10 or --set rho_limit=0.9 (repeatable)")
       ->allow_extra_args(false);
 
+  // CLI11 would only say that a subcommand is required: name the word.
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string word = argv[1];
+    if (word != "run" && word != "eos" && word != "info") {
+      std::cerr << "rubble: error: unknown command '" << word << "'; expected run, eos or info (rubble --help)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -343,6 +374,9 @@ int main(int argc, char** argv) {
   } catch (const rubble::RunError& e) {
     std::cerr << "rubble: error: " << e.what() << "\n";
     return 3;
+  } catch (const rubble::OutputError& e) {
+    std::cerr << "rubble: error: output: " << e.what() << "\n";
+    return 5;
   } catch (const std::exception& e) {
     std::cerr << "rubble: error: " << e.what() << "\n";
     return 1;

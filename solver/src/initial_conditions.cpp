@@ -2,12 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
+#include <variant>
 #include <numbers>
 #include <string>
 
 #include "hydro_cpu.hpp"
 #include "rubble/core/error.hpp"
+#include "rubble/neighbors/cell_list.hpp"
+#include "rubble/neighbors/spatial_order.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/reference/lane_emden.hpp"
 
@@ -116,6 +122,7 @@ std::vector<Vec<D>> polytrope_points(const BodyConfig& b, const Polytrope& model
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps) {
+  check_resources<D>(scene, needs, hfact);  // before any particle is made
   const auto materials = material_params_from_scene(scene);
   std::vector<std::vector<Vec<D>>> body_points;
   std::size_t total = 0;
@@ -210,6 +217,142 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
 }
 
 template <int D>
+double estimated_particle_count(const Scene& scene) {
+  const double pi = std::numbers::pi;
+  double total = 0;
+  for (const BodyConfig& b : scene.bodies) {
+    if (b.shape == BodyShape::Polytrope) {
+      total += double(b.particles);
+      continue;
+    }
+    double volume = 1;
+    if (b.shape == BodyShape::Box) {
+      for (int k = 0; k < D; ++k) volume *= std::max(b.max[k] - b.min[k], 0.0);
+    } else {
+      const double ball = D == 1 ? 2 : D == 2 ? pi : 4 * pi / 3;
+      volume = ball * std::pow(b.radius, D);
+      if (b.shape == BodyShape::Ring) volume -= ball * std::pow(b.inner_radius, D);
+    }
+    total += volume / lattice_cell_volume<D>(b.lattice, b.spacing);
+  }
+  return total;
+}
+
+template <int D>
+std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, double hfact) {
+  ParticleStore<D> one;
+  one.allocate(1, needs);
+  std::size_t store = 0, snapshot = 0;
+  for (const auto& f : field_table<D>())
+    std::visit(
+        [&](auto member) {
+          const auto& arr = one.*member;
+          if (arr.empty()) return;
+          store += sizeof(arr[0]);
+          if (f.snapshot) snapshot += sizeof(arr[0]);
+        },
+        f.member);
+  const std::size_t integrator = scene.simulation.integrator == Integrator::RK2Adaptive ? 2 * store : store / 2;
+  // neighbours within the search radius 1.15 h (h = hfact spacings)
+  const double r = 1.15 * hfact, pi = std::numbers::pi;
+  const double neighbours = D == 1 ? 2 * r : D == 2 ? pi * r * r : 4 * pi / 3 * r * r * r;
+  const std::size_t lists = std::size_t(4 * neighbours) + 4;
+  const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
+  return store + integrator + snapshot + lists + cells;
+}
+
+double available_memory_bytes() {
+  if (const char* env = std::getenv("RUBBLE_MEMORY_LIMIT"); env && *env) {
+    char* end = nullptr;
+    const double v = std::strtod(env, &end);
+    if (end && *end == '\0' && v > 0) return v;
+  }
+  double avail = 0;
+  if (std::ifstream in("/proc/meminfo"); in) {
+    std::string key;
+    double kb = 0;
+    std::string unit;
+    while (in >> key >> kb >> unit)
+      if (key == "MemAvailable:") {
+        avail = kb * 1024;
+        break;
+      }
+  }
+  if (std::ifstream in("/sys/fs/cgroup/memory.max"); in) {
+    std::string text;
+    in >> text;
+    char* end = nullptr;
+    const double limit = std::strtod(text.c_str(), &end);
+    if (end && *end == '\0' && limit > 0) avail = avail > 0 ? std::min(avail, limit) : limit;
+  }
+  return avail;
+}
+
+std::string format_bytes(double bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB"};
+  int u = 0;
+  while (bytes >= 1024 && u < 5) {
+    bytes /= 1024;
+    ++u;
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.3g %s", bytes, units[u]);
+  return buf;
+}
+
+template <int D>
+void check_resources(const Scene& scene, const FieldNeeds& needs, double hfact) {
+  const double n = estimated_particle_count<D>(scene);
+  if (n > double(std::numeric_limits<std::int32_t>::max()))
+    throw InputError(scene.file, "bodies",
+                     "the bodies would hold about " + fmt_g(n) + " particles, more than the " +
+                         std::to_string(std::numeric_limits<std::int32_t>::max()) +
+                         " a 32-bit particle id can number: use a coarser spacing");
+  const double per = double(bytes_per_particle<D>(scene, needs, hfact));
+  const double need = n * per, have = available_memory_bytes();
+  if (have > 0 && need > have)
+    throw InputError(scene.file, "bodies",
+                     "the run needs about " + format_bytes(need) + " (" + fmt_g(n) + " particles x " + fmt_g(per) +
+                         " bytes), more than the " + format_bytes(have) +
+                         " of memory available (MemAvailable, the cgroup limit, or RUBBLE_MEMORY_LIMIT): use a "
+                         "coarser spacing or a larger machine");
+}
+
+template <int D>
+void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
+                   const Box<D>& domain, double hfact) {
+  if (scene.simulation.allow_overlap || scene.bodies.size() < 2) return;
+  const std::size_t n = ps.n;
+  std::vector<Real> reach(n);  // half the particle's spacing
+  for (std::size_t i = 0; i < n; ++i) reach[i] = Real(0.5) * ps.h[i] / Real(hfact);
+  CellList<D> cells;
+  cells.build(ps.x.data(), reach.data(), n, bounding_box<D>(ps.x.data(), n, domain));
+  NeighborLists nb;
+  cells.find_neighbors(nb);
+  auto body_of = [&](std::size_t i) {
+    std::size_t k = 0;
+    while (k + 2 < body_first.size() && std::int64_t(ps.id[i]) >= body_first[k + 1]) ++k;
+    return k;
+  };
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::uint32_t j = nb.offset[a]; j < nb.offset[a + 1]; ++j) {
+      const std::size_t b = nb.index[j];
+      if (b <= a) continue;
+      const std::size_t ka = body_of(a), kb = body_of(b);
+      if (ka == kb) continue;
+      const Real r = norm(domain.separation(ps.x[a], ps.x[b]));
+      if (!(r < std::min(reach[a], reach[b]))) continue;
+      const std::size_t first = std::min(ka, kb), second = std::max(ka, kb);
+      throw InputError(scene.file, "bodies[" + std::to_string(second) + "]",
+                       "overlaps bodies[" + std::to_string(first) + "]: particles " +
+                           std::to_string(ps.id[a] - body_first[ka]) + " of bodies[" + std::to_string(ka) + "] and " +
+                           std::to_string(ps.id[b] - body_first[kb]) + " of bodies[" + std::to_string(kb) + "] are " +
+                           fmt_g(r) + " m apart, less than half their spacing; move the bodies apart, or set "
+                           "simulation.allow_overlap = true if they are meant to overlap");
+    }
+}
+
+template <int D>
 Box<D> domain_from_scene(const Scene& scene) {
   Box<D> box;
   for (int k = 0; k < D; ++k) {
@@ -223,7 +366,12 @@ Box<D> domain_from_scene(const Scene& scene) {
 #define RUBBLE_INSTANTIATE(D)                                                                      \
   template double lattice_cell_volume<D>(Lattice, double);                                         \
   template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&); \
-  template Box<D> domain_from_scene<D>(const Scene&);
+  template Box<D> domain_from_scene<D>(const Scene&);                                              \
+  template double estimated_particle_count<D>(const Scene&);                                       \
+  template std::size_t bytes_per_particle<D>(const Scene&, const FieldNeeds&, double);              \
+  template void check_resources<D>(const Scene&, const FieldNeeds&, double);                        \
+  template void check_overlap<D>(const Scene&, const ParticleStore<D>&, const std::vector<std::int64_t>&, \
+                                 const Box<D>&, double);
 RUBBLE_INSTANTIATE(1)
 RUBBLE_INSTANTIATE(2)
 RUBBLE_INSTANTIATE(3)

@@ -1,6 +1,12 @@
 // run_scene: set up particles from the scene, step them to the end time,
 // write snapshots, the XDMF index and conserved.csv.
+#include <fcntl.h>
 #include <signal.h>  // sigaction (POSIX)
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <chrono>
@@ -59,6 +65,44 @@ struct LoopState {
   double next_output = 0;
 };
 
+// One run at a time per output directory: an exclusive flock() on
+// DIR/.rubble.lock, held until the run ends (the OS releases it if the
+// process dies, so no stale lock survives a crash). The file holds the pid.
+class DirectoryLock {
+ public:
+  static constexpr const char* kName = ".rubble.lock";
+  explicit DirectoryLock(const std::filesystem::path& dir) {
+    path_ = (dir / kName).string();
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw OutputError("cannot create the lock file '" + path_ + "': " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      char pid[32] = {0};
+      const ssize_t got = ::read(fd_, pid, sizeof pid - 1);
+      ::close(fd_);
+      fd_ = -1;
+      throw InputError(dir.string(), "",
+                       "another rubble run" + (got > 0 ? " (pid " + std::string(pid, std::size_t(got)) + ")" : std::string()) +
+                           " is writing into this directory; wait for it or choose another --out DIR");
+    }
+    const std::string me = std::to_string(::getpid());
+    if (::ftruncate(fd_, 0) != 0 || ::write(fd_, me.data(), me.size()) != ssize_t(me.size())) {
+      // the pid is for messages only: the lock itself is held
+    }
+  }
+  // The file goes with the lock: a finished run leaves no trace of it.
+  ~DirectoryLock() {
+    if (fd_ < 0) return;
+    ::unlink(path_.c_str());
+    ::close(fd_);
+  }
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
 // Writes snapshots NAME.NNNN.h5, the checkpoint NAME.checkpoint.h5,
 // NAME.xdmf and conserved.csv into out_dir. Every file it writes carries
 // the restart group, so a run can resume from any of them.
@@ -69,11 +113,32 @@ class OutputWriter {
       : scene_(scene), enabled_(opt.write_output), dir_(opt.out_dir), count_(start.next_snapshot),
         body_first_(std::move(body_first)) {
     if (!enabled_) return;
-    std::filesystem::create_directories(dir_);
-    xdmf_ = std::make_unique<XdmfWriter>((dir_ / (scene.output.name + ".xdmf")).string(), D);
+    std::error_code ec;
+    created_ = std::filesystem::create_directories(dir_, ec);
+    if (ec) throw OutputError("cannot create the output directory '" + dir_.string() + "': " + ec.message());
+    try {
+      open(start);
+    } catch (...) {
+      // a directory this run made and could not use is not left behind
+      lock_.reset();
+      if (created_) std::filesystem::remove_all(dir_, ec);
+      throw;
+    }
+  }
+
+ private:
+  void open(const LoopStart& start) {
+    lock_ = std::make_unique<DirectoryLock>(dir_);
+    if (!start.resumed) {  // a new run starts in an empty directory (the check in main may be stale)
+      for (const auto& e : std::filesystem::directory_iterator(dir_))
+        if (e.path().filename() != DirectoryLock::kName)
+          throw InputError(dir_.string(), "", "the output directory is not empty (" + e.path().filename().string() +
+                                                  "); choose another --out DIR");
+    }
+    guarded([&] { xdmf_ = std::make_unique<XdmfWriter>((dir_ / (scene_.output.name + ".xdmf")).string(), D); });
     const std::string csv = (dir_ / "conserved.csv").string();
     if (!start.resumed) {
-      log_ = std::make_unique<ConservedLog>(csv, D);
+      guarded([&] { log_ = std::make_unique<ConservedLog>(csv, D); });
       return;
     }
     // Resumed: into the restart snapshot's own directory, the run's
@@ -84,21 +149,24 @@ class OutputWriter {
     const bool same_dir = std::filesystem::equivalent(dir_, start.from_dir, ec);
     if (same_dir) {
       for (int k = 0; k < count_; ++k) {
-        const std::string name = snapshot_filename(scene.output.name, k);
+        const std::string name = snapshot_filename(scene_.output.name, k);
         if (!std::filesystem::exists(dir_ / name)) continue;
         const SnapshotSummary sum = read_snapshot_summary<D>((dir_ / name).string());
         xdmf_->add_snapshot(name, sum.time, sum.n, sum.fields);
       }
     }
-    log_ = std::make_unique<ConservedLog>(csv, D, (start.from_dir / "conserved.csv").string(), start.step);
+    guarded([&] {
+      log_ = std::make_unique<ConservedLog>(csv, D, (start.from_dir / "conserved.csv").string(), start.step);
+    });
   }
 
+ public:
   bool enabled() const { return enabled_; }
   // Whether snapshot() writes anything: the host state is fetched (on the
   // CUDA backend, downloaded) only then.
   bool writes_snapshots() const { return enabled_ && scene_.output.snapshots; }
   void log(const ConservedRecord& r) {
-    if (enabled_) log_->append(r);
+    if (enabled_) guarded([&] { log_->append(r); });
   }
 
   // The next regular snapshot; `loop` is the state after it (the next
@@ -108,7 +176,7 @@ class OutputWriter {
     const std::string name = snapshot_filename(scene_.output.name, count_++);
     write_file(ps, t, step, name, restart_state(loop, false));
     xdmf_->add_snapshot(name, t, ps.n, snapshot_fields<D>(ps));
-    xdmf_->write();
+    guarded([&] { xdmf_->write(); });
   }
 
   // NAME.checkpoint.h5 (replaced atomically by each new one): a restart
@@ -159,13 +227,30 @@ class OutputWriter {
       meta.restartable = true;
       meta.restart = *restart;
     }
-    write_snapshot<D>((dir_ / name).string(), ps, meta);
+    guarded([&] { write_snapshot<D>((dir_ / name).string(), ps, meta); });
     slowest_write_ = std::max(slowest_write_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+
+  // Writers report failures as std::runtime_error with the OS's reason:
+  // they become OutputErrors (exit status 5).
+  template <class F>
+  static void guarded(F&& f) {
+    try {
+      f();
+    } catch (const InputError&) {
+      throw;
+    } catch (const OutputError&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      throw OutputError(e.what());
+    }
   }
 
   const Scene& scene_;
   bool enabled_;
   std::filesystem::path dir_;
+  bool created_ = false;                 // this run made the directory
+  std::unique_ptr<DirectoryLock> lock_;  // held while the run writes
   int count_ = 0;
   std::vector<std::int64_t> body_first_;
   double slowest_write_ = 0;
@@ -402,6 +487,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     double dt_physics = limit;
     const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
     if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
+    const double t_before = t;
     try {
       if (sim.integrator == Integrator::Leapfrog) {
         sys.leapfrog(dt);
@@ -432,9 +518,16 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
                      " s at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")" +
                      (file.empty() ? "" : "; the state is in " + file));
     }
-    if (out.enabled()) out.log(sys.conserved(t, step, dt));
     progress.update(t, dt, step);
-    if (t >= loop.next_output * (1 - 1e-12)) {
+    const bool output_time = t >= loop.next_output * (1 - 1e-12);
+    // conserved.csv: a row per output.conserved_interval crossed (a function
+    // of t alone, so a resumed run logs the same rows), at every snapshot
+    // and at the end
+    const double ci = scene.output.conserved_interval;
+    if (out.enabled() && (ci <= 0 || std::floor(t / ci) != std::floor(t_before / ci) || output_time ||
+                          t >= t_end * (1 - 1e-12)))
+      out.log(sys.conserved(t, step, dt));
+    if (output_time) {
       loop.next_output = std::min(loop.next_output + out_interval, t_end);
       if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
     }
@@ -525,6 +618,12 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   if (opt.restart_from.empty()) {
     body_first = generate_bodies<D>(scene, hfact, needs, ps);
     check_initial_state<D>(scene, ps, body_first);  // x, v, rho, h, u as generated
+    check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact);
+    if (!opt.quiet && opt.write_output) {
+      const std::size_t per = bytes_per_particle<D>(scene, needs, hfact);
+      std::fprintf(stderr, "rubble: %zu particles, about %s of memory (%zu bytes each)\n", ps.n,
+                   format_bytes(double(per) * double(ps.n)).c_str(), per);
+    }
   } else {
     SnapshotMeta meta;
     read_restart<D>(opt.restart_from, ps, meta);

@@ -110,6 +110,16 @@ bool is_identifier(std::string_view s) {
 
 // ---- --set overrides ----------------------------------------------------------
 
+// A key as --set takes it: bodies[0].spacing -> bodies.0.spacing.
+std::string set_form(std::string key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '[') out += '.';
+    else if (c != ']') out += c;
+  }
+  return out;
+}
+
 // Apply one "dotted.key=value" override to the TOML tree. Returns the key in
 // message form (bodies[0].spacing) so errors about it can say where it came from.
 std::string apply_override(toml::table& root, const std::string& text, const std::string& file) {
@@ -128,6 +138,11 @@ std::string apply_override(toml::table& root, const std::string& text, const std
   }
   for (const auto& p : parts)
     if (p.empty()) throw InputError(file, key, "--set '" + text + "': empty component in the key");
+  // Messages write array entries as bodies[0]; --set takes them dotted.
+  if (key.find_first_of("[]") != std::string::npos)
+    throw InputError(file, key,
+                     "--set '" + text + "': keys are dotted, array entries by number: write --set " +
+                         set_form(key) + "=" + value);
 
   // The value is TOML if it parses as TOML (0.5, true, "text", [1, 2],
   // {alpha = 1}); otherwise it is taken as a plain string (hcp, leapfrog).
@@ -212,6 +227,12 @@ class SceneReader {
   [[noreturn]] void fail(const std::string& key, std::string problem, const toml::node* where = nullptr) const {
     for (const auto& [k, text] : set_by_)
       if (key == k || key.rfind(k + ".", 0) == 0 || key.rfind(k + "[", 0) == 0) {
+        // a suggested key, in the form --set takes
+        if (const auto at = problem.find("did you mean '"); at != std::string::npos) {
+          const auto from = at + 14, to = problem.find('\'', from);
+          if (to != std::string::npos)
+            problem.replace(from, to - from, "--set " + set_form(problem.substr(from, to - from)) + "=...");
+        }
         problem += " (set by --set " + text + ")";
         throw InputError(file_, key, problem);
       }
@@ -373,7 +394,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
               "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
-              "kernel_correction", "xsph", "shifting", "gravity"});
+              "kernel_correction", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
   if (!dim) fail(p + ".dimension", "missing required key (1, 2 or 3)");
@@ -446,6 +467,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   }
   // A uniform external acceleration (issue #12): D numbers, m/s^2.
   if (auto g = vector(*t, "gravity", p)) s.gravity = *g;
+  if (auto b = boolean(*t, "allow_overlap", p)) s.allow_overlap = *b;
 }
 
 // ---- materials (docs/scene.md "Materials"; issue #3) -------------------------
@@ -1036,7 +1058,7 @@ void SceneReader::read_domain(const toml::table& t, DomainConfig& d) {
 
 void SceneReader::read_output(const toml::table& t, OutputConfig& o) {
   const std::string p = "output";
-  check_keys(t, p, {"name", "interval", "snapshots"});
+  check_keys(t, p, {"name", "interval", "snapshots", "conserved_interval"});
   if (auto s = string(t, "name", p)) {
     if (!is_identifier(*s))
       fail(p + ".name", "is '" + *s + "'; a file stem may contain only letters, digits, '_' and '-'", t.get("name"));
@@ -1047,6 +1069,10 @@ void SceneReader::read_output(const toml::table& t, OutputConfig& o) {
     o.interval = *x;
   }
   if (auto b = boolean(t, "snapshots", p)) o.snapshots = *b;
+  if (auto x = number(t, "conserved_interval", p)) {
+    require(*x >= 0, t, "conserved_interval", p, *x, ">= 0 (0 = a row every step)");
+    o.conserved_interval = *x;
+  }
 }
 
 // ---- self-gravity (docs/scene.md "[gravity]"; issue #5) ------------------------
@@ -1192,7 +1218,25 @@ Scene SceneReader::read(const toml::table& root) {
   }
 
   if (const toml::table* d = table(root, "domain", "")) read_domain(*d, scene.domain);
-  if (const toml::table* o = table(root, "output", "")) read_output(*o, scene.output);
+  const toml::table* out_table = table(root, "output", "");
+  if (out_table) read_output(*out_table, scene.output);
+  // Resource guards (issue #13): a bounded number of snapshots, and a
+  // conserved.csv of at most ~1e4 rows unless asked for more.
+  constexpr double kMaxSnapshots = 1e5;
+  if (scene.output.interval > 0 && scene.simulation.end_time / scene.output.interval > kMaxSnapshots)
+    fail("output.interval",
+         "is " + fmt(scene.output.interval) + " s, which would write " +
+             fmt(std::ceil(scene.simulation.end_time / scene.output.interval) + 1) + " snapshots up to end_time = " +
+             fmt(scene.simulation.end_time) + " s; at most 1e5 are allowed",
+         out_table ? out_table->get("interval") : nullptr);
+  if (!(out_table && out_table->contains("conserved_interval")))
+    scene.output.conserved_interval = scene.simulation.end_time / 1e4;
+
+  // Something must move: a scene of boundary bodies only has nothing to integrate.
+  if (std::all_of(scene.bodies.begin(), scene.bodies.end(),
+                  [](const BodyConfig& b) { return b.boundary != BoundaryKind::None; }))
+    fail("bodies", "every body is a boundary (boundary = \"fixed\" or \"moving\"): there is nothing to integrate",
+         root.get("bodies"));
 
   // Solids (a material with a shear modulus) evolve the density with the
   // continuity equation: summation underestimates it at free surfaces.

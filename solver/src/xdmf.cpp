@@ -16,7 +16,10 @@
 //    datasets; nothing padded is stored.
 #include "rubble/io/xdmf.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -90,15 +93,31 @@ void XdmfWriter::add_snapshot(const std::string& h5_filename, double time, std::
   entries_.push_back({h5_filename, time, n, fields});
 }
 
-std::string XdmfWriter::xml() const {
-  std::ostringstream o;
-  o << "<?xml version=\"1.0\" ?>\n"
-    << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-    << "<Xdmf Version=\"2.0\">\n"
-    << "  <Domain>\n"
-    << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+namespace {
 
-  for (const auto& e : entries_) {
+const char* const kHead =
+    "<?xml version=\"1.0\" ?>\n"
+    "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+    "<Xdmf Version=\"2.0\">\n"
+    "  <Domain>\n"
+    "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+const char* const kTail =
+    "    </Grid>\n"
+    "  </Domain>\n"
+    "</Xdmf>\n";
+
+}  // namespace
+
+std::string XdmfWriter::xml() const {
+  std::string o = kHead;
+  for (const auto& e : entries_) o += entry_xml(e);
+  return o + kTail;
+}
+
+// One snapshot's <Grid>.
+std::string XdmfWriter::entry_xml(const Entry& e) const {
+  std::ostringstream o;
+  {
     const std::string N = std::to_string(e.n);
     const std::string D = std::to_string(dim_);
     const std::string in = "          ";  // indent of DataItems inside Geometry / Attribute
@@ -157,18 +176,34 @@ std::string XdmfWriter::xml() const {
     }
     o << "      </Grid>\n";
   }
-  o << "    </Grid>\n"
-    << "  </Domain>\n"
-    << "</Xdmf>\n";
   return o.str();
 }
 
-void XdmfWriter::write() const {
+void XdmfWriter::write() {
+  // O(1) per snapshot: the entries not yet in the file go in before its
+  // closing tags, in place, when the file is still the one last written
+  // (same size); otherwise the whole index is rewritten atomically.
+  std::error_code ec;
+  const std::string tail = kTail;
+  if (in_file_ > 0 && in_file_ < entries_.size() && std::filesystem::file_size(path_, ec) == file_size_ && !ec) {
+    std::string more;
+    for (std::size_t k = in_file_; k < entries_.size(); ++k) more += entry_xml(entries_[k]);
+    more += tail;
+    std::FILE* f = std::fopen(path_.c_str(), "r+b");
+    if (!f) throw std::runtime_error("xdmf '" + path_ + "': cannot open it to append: " + std::strerror(errno));
+    const bool ok = std::fseek(f, long(file_size_ - tail.size()), SEEK_SET) == 0 &&
+                    std::fwrite(more.data(), 1, more.size(), f) == more.size();
+    if (std::fclose(f) != 0 || !ok) throw std::runtime_error("xdmf '" + path_ + "': appending failed: " + std::strerror(errno));
+    file_size_ += more.size() - tail.size();
+    in_file_ = entries_.size();
+    return;
+  }
+  const std::string text = xml();
   const std::string tmp = path_ + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error("xdmf '" + path_ + "': cannot open '" + tmp + "' for writing");
-    out << xml();
+    out << text;
     out.close();
     if (!out) {
       std::remove(tmp.c_str());
@@ -179,6 +214,8 @@ void XdmfWriter::write() const {
     std::remove(tmp.c_str());
     throw std::runtime_error("xdmf '" + path_ + "': rename from '" + tmp + "' failed");
   }
+  file_size_ = text.size();
+  in_file_ = entries_.size();
 }
 
 }  // namespace rubble

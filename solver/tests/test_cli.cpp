@@ -361,4 +361,113 @@ TEST_F(Cli, FailedStepNamesTheParticleAndKeepsTheLastGoodState) {
   EXPECT_FALSE(failed.restartable) << "a diagnostic is not a restart point";
 }
 
+// An unknown command names the word (issue #13 item 7).
+TEST_F(Cli, UnknownCommandNamesTheWord) {
+  const Result r = rubble("runn ok.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("unknown command 'runn'"), std::string::npos) << r.err;
+}
+
+// --set takes dotted keys; its hints use that form, not the bracket form of
+// the messages' key names.
+TEST_F(Cli, SetHintsUseTheDottedForm) {
+  write_scene("ok.toml", kValid);
+  Result r = rubble("run ok.toml --set 'bodies[0].spacing=0.1'");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("write --set bodies.0.spacing=0.1"), std::string::npos) << r.err;
+  r = rubble("run ok.toml --set bodies.0.spacng=0.1");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("did you mean '--set bodies.0.spacing=...'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// Overlapping bodies are an error naming both, unless allowed; a scene of
+// boundaries only has nothing to integrate.
+TEST_F(Cli, OverlappingBodiesAndNothingToIntegrate) {
+  const std::string second =
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"gas\"\nmin = [0.5]\nmax = [1.5]\nspacing = 0.05\n"
+      "density = 1.0\npressure = 1.0\n";
+  write_scene("overlap.toml", kValid + second);
+  Result r = rubble("run overlap.toml --quiet");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("key 'bodies[1]': overlaps bodies[0]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("simulation.allow_overlap"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  r = rubble("run overlap.toml --quiet --set simulation.allow_overlap=true");
+  EXPECT_EQ(r.code, 0) << r.err;
+  // side by side (0.05 apart, the spacing): no overlap
+  write_scene("beside.toml", kValid + replace(replace(second, "min = [0.5]", "min = [1.0]"), "max = [1.5]", "max = [2.0]"));
+  r = rubble("run beside.toml --quiet");
+  EXPECT_EQ(r.code, 0) << r.err;
+  write_scene("walls.toml", replace(kValid, "pressure = 1.0", "pressure = 1.0\nboundary = \"fixed\""));
+  r = rubble("run walls.toml --quiet");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nothing to integrate"), std::string::npos) << r.err;
+}
+
+// Resource guards: a scene whose memory estimate exceeds what is available
+// (here RUBBLE_MEMORY_LIMIT) or whose particles a 32-bit id cannot number is
+// refused before any particle is made, with the estimate; so are more than
+// 1e5 snapshots.
+TEST_F(Cli, ResourceGuards) {
+  write_scene("ok.toml", kValid);
+  Result r = rubble("run ok.toml --quiet");  // 20 particles: fits anywhere
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = rubble("run ok.toml --quiet --out small");
+  EXPECT_EQ(r.code, 0) << r.err;
+  setenv("RUBBLE_MEMORY_LIMIT", "1000", 1);
+  r = rubble("run ok.toml --quiet --out never");
+  unsetenv("RUBBLE_MEMORY_LIMIT");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("the run needs about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("20 particles x"), std::string::npos) << r.err;
+  r = rubble("run ok.toml --quiet --out never --set bodies.0.spacing=1e-10");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("a 32-bit particle id"), std::string::npos) << r.err;
+  r = rubble("run ok.toml --quiet --out never --set output.interval=1e-9");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("key 'output.interval'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "never"));
+  r = rubble("info");
+  EXPECT_NE(r.out.find("memory free:"), std::string::npos) << r.out;
+}
+
+// Output safety: a second run into a directory a run is writing is refused
+// (the lock), naming the other run; an output path that cannot be made
+// gives the OS's reason and exit status 5; nothing is left behind.
+TEST_F(Cli, OutputDirectoryLockAndUnwritablePaths) {
+  write_scene("long.toml", long_scene());
+  const pid_t pid = spawn({"run", "long.toml", "--quiet", "--out", "busy"});
+  ASSERT_TRUE(wait_for_lines(dir_ / "busy" / "conserved.csv", 2)) << "the run did not start";
+  EXPECT_TRUE(fs::exists(dir_ / "busy" / ".rubble.lock"));
+  const Result second = rubble("run --restart busy/snapshot.0000.h5 --quiet");
+  EXPECT_EQ(second.code, 2) << second.err;
+  EXPECT_NE(second.err.find("another rubble run (pid " + std::to_string(pid) + ")"), std::string::npos) << second.err;
+  kill(pid, SIGTERM);
+  EXPECT_EQ(wait_for(pid).code, 4);
+  EXPECT_FALSE(fs::exists(dir_ / "busy" / ".rubble.lock")) << "the lock file goes with the run";
+
+  write_scene("ok.toml", kValid);
+  std::ofstream(dir_ / "blocker") << "a file, not a directory";
+  const Result r = rubble("run ok.toml --quiet --out blocker/sub");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("Not a directory"), std::string::npos) << r.err;
+}
+
+// conserved.csv has its own interval: a row per interval crossed, at every
+// snapshot and at the end; 0 gives every step.
+TEST_F(Cli, ConservedLogHasItsOwnInterval) {
+  const std::string scene = replace(kValid, "end_time = 0.001", "end_time = 0.2");
+  write_scene("log.toml", scene);
+  ASSERT_EQ(rubble("run log.toml --quiet --out every --set output.conserved_interval=0").code, 0);
+  ASSERT_EQ(rubble("run log.toml --quiet --out some --set output.conserved_interval=0.05").code, 0);
+  const std::string every = slurp(dir_ / "every" / "conserved.csv"), some = slurp(dir_ / "some" / "conserved.csv");
+  const auto rows = [](const std::string& t) { return std::count(t.begin(), t.end(), '\n') - 1; };
+  EXPECT_GT(rows(every), 20) << "the scene takes more steps than the coarse log has rows";
+  EXPECT_GE(rows(some), 5);   // t = 0 and 4 intervals (the last at the end)
+  EXPECT_LE(rows(some), 6);
+  // the last row of both is the end state
+  EXPECT_EQ(every.substr(every.rfind('\n', every.size() - 2)), some.substr(some.rfind('\n', some.size() - 2)));
+}
+
 }  // namespace

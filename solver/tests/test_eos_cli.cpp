@@ -242,3 +242,23 @@ velocity = [0.01, 0.0]
 }
 
 }  // namespace
+
+// A state outside the range of numbers is flagged on its row and counted on
+// stderr, never printed as nan/inf silently; a grid too large to be a
+// table is refused (issue #13 items 5 and 7).
+TEST_F(eos_cli, NonFiniteStatesAreFlaggedAndHugeTablesRefused) {
+  const Result r = rubble("eos basalt --rho 1000:1e300:2 --u 1:1e300:2 --format csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 5u);
+  int flagged = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const bool nonfinite = lines[i].find("nan") != std::string::npos || lines[i].find("inf") != std::string::npos;
+    const bool marked = lines[i].find("+NONFINITE") != std::string::npos;
+    EXPECT_EQ(nonfinite, marked) << lines[i];
+    flagged += marked;
+  }
+  EXPECT_GT(flagged, 0) << "rho = u = 1e300 overflows the Tillotson pressure";
+  EXPECT_NE(r.err.find(std::to_string(flagged) + " of 4 states give a non-finite"), std::string::npos) << r.err;
+  expect_usage_error("eos basalt --rho 1:2:10000 --u 0:1:10000", "more than the 1e7 rows");
+}

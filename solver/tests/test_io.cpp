@@ -1,6 +1,7 @@
 // Output of runs: HDF5 snapshots, the XDMF index, conserved.csv, progress.
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -497,6 +498,33 @@ TEST(Xdmf, StressShapeMatchesTheDataset) {
     const std::string dims = d == 1 ? "7 1 1" : "7 " + std::to_string(d) + " " + std::to_string(d);
     EXPECT_NE(xml.find("Dimensions=\"" + dims + "\"", a), std::string::npos) << d << "\n" << xml;
   }
+}
+
+// Each snapshot costs O(1): after the first write the index is appended
+// in place (same file, same inode) rather than rewritten whole; a file
+// changed behind the writer's back is rewritten whole.
+TEST(Xdmf, AppendsInPlace) {
+  TempDir dir;
+  const std::string path = dir.file("run.xdmf");
+  XdmfWriter w(path, 2);
+  auto inode = [&] {
+    struct stat st {};
+    stat(path.c_str(), &st);
+    return st.st_ino;
+  };
+  w.add_snapshot("run.0000.h5", 0.0, 3, {{"x", 2}, {"rho", 1}});
+  w.write();
+  const auto first = inode();
+  for (int k = 1; k < 5; ++k) {
+    w.add_snapshot(snapshot_filename("run", k), 0.1 * k, 3, {{"x", 2}, {"rho", 1}});
+    w.write();
+    EXPECT_EQ(inode(), first) << "snapshot " << k << " rewrote the file";
+    EXPECT_EQ(read_text(path), w.xml());
+  }
+  std::ofstream(path, std::ios::app) << "<!-- edited -->\n";
+  w.add_snapshot("run.0005.h5", 0.5, 3, {{"x", 2}, {"rho", 1}});
+  w.write();
+  EXPECT_EQ(read_text(path), w.xml());
 }
 
 TEST(Xdmf, Errors) {

@@ -211,6 +211,34 @@ TEST(Restart, SelfGravityRk2IsBitIdentical) { expect_restart_identical<3>(gravit
 TEST(Restart, FromACheckpointLeapfrog) { expect_checkpoint_identical<2>(solid_scene("leapfrog"), "ckpt_lf"); }
 TEST(Restart, FromACheckpointRk2) { expect_checkpoint_identical<2>(hydro_scene("rk2_adaptive"), "ckpt_rk2"); }
 
+// --checkpoint-every: the checkpoint is rewritten as the run goes (here
+// after every step), and a run resumed from it ends where the whole run did.
+TEST(Restart, PeriodicCheckpointsResumeIdentically) {
+  const fs::path a = temp_dir("periodic"), b = temp_dir("periodic_resumed");
+  const Scene scene = parse_scene(solid_scene("leapfrog"), "solid.toml");
+  RunOptions opt = into(a);
+  opt.checkpoint_every_seconds = 1e-9;
+  const FinalState whole = run_scene(scene, opt);
+  EXPECT_TRUE(whole.stopped.empty());
+  const std::string checkpoint = (a / (scene.output.name + ".checkpoint.h5")).string();
+  const SnapshotMeta meta = read_snapshot_meta(checkpoint);
+  EXPECT_TRUE(meta.restartable);
+  EXPECT_TRUE(meta.restart.checkpoint);
+  EXPECT_EQ(meta.step, whole.steps - 1) << "the last checkpoint is the step before the end";
+  RunOptions resume = into(b);
+  resume.restart_from = checkpoint;
+  run_scene(load_restart_scene(checkpoint), resume);
+  ParticleStore<2> pa, pb;
+  SnapshotMeta ma, mb;
+  read_restart<2>((a / snapshot_filename(scene.output.name, 4)).string(), pa, ma);
+  read_restart<2>((b / snapshot_filename(scene.output.name, 4)).string(), pb, mb);
+  expect_same_bits<2>(pa, pb);
+  if (!::testing::Test::HasFailure()) {
+    fs::remove_all(a);
+    fs::remove_all(b);
+  }
+}
+
 // The library file as the run read it travels in the snapshot: editing it
 // afterwards changes nothing of the resumed run.
 TEST(Restart, LibraryValuesTravelInTheSnapshot) {

@@ -325,8 +325,9 @@ TEST(Scene, SetOverrideCreatesTables) {
 }
 
 TEST(Scene, SetOverrideRejectsUnknownKey) {
+  // the hint is in the form --set takes (issue #13 item 7)
   expect_error(kMinimal, "simulation.end_tim", "--set simulation.end_tim=1", {"simulation.end_tim=1"});
-  expect_error(kMinimal, "bodies[0].spacin", "did you mean 'bodies[0].spacing'", {"bodies.0.spacin=1"});
+  expect_error(kMinimal, "bodies[0].spacin", "did you mean '--set bodies.0.spacing=...'", {"bodies.0.spacin=1"});
   expect_error(kMinimal, "", "expected dotted.key=value", {"simulation.end_time"});
 }
 

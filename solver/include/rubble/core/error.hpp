@@ -25,6 +25,13 @@ class RunError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Output that could not be written (an unwritable or full disk, a
+// directory another run holds): the message carries the OS's reason.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // A number for a message, as %g prints it (never "0.000000" for 1e-9).
 inline std::string fmt_g(double x) {
   char buf[32];

@@ -1,5 +1,9 @@
 #pragma once
 // Initial-condition generators: turn the scene's [[bodies]] into particles.
+#include <cstdint>
+#include <string>
+#include <vector>
+
 #include "rubble/core/box.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/scene/scene.hpp"
@@ -20,6 +24,41 @@ double lattice_cell_volume(Lattice lattice, double dx);
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps);
+
+// ---- resource guards (issue #13) ----
+
+// The particle count the bodies will hold, from their volumes and lattice
+// cells (polytropes: their `particles`), without generating them.
+template <int D>
+double estimated_particle_count(const Scene& scene);
+
+// Bytes the run holds per particle: the allocated fields, the integrator's
+// copies (RK2: two stores; leapfrog: the half-step fields), the state
+// check's copy of the snapshot fields, the neighbour lists (4 bytes per
+// neighbour within the search radius) and the cell list's sorted copies.
+template <int D>
+std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, double hfact);
+
+// Memory this process may use: RUBBLE_MEMORY_LIMIT (bytes) if set, else
+// the smaller of /proc/meminfo's MemAvailable and the cgroup limit; 0 if
+// unknown.
+double available_memory_bytes();
+
+// "1.5 GiB", "320 MiB", ...
+std::string format_bytes(double bytes);
+
+// Refuses (InputError naming the file and `bodies`) a scene with more
+// particles than a 32-bit id can number, or whose estimated memory exceeds
+// the available memory; the message gives the estimate.
+template <int D>
+void check_resources(const Scene& scene, const FieldNeeds& needs, double hfact);
+
+// Bodies whose particles come closer than half the particle spacing
+// (estimated per particle as h / hfact) overlap: an InputError naming both
+// bodies, unless simulation.allow_overlap.
+template <int D>
+void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
+                   const Box<D>& domain, double hfact);
 
 // The domain box from [domain]: periodic axes get their bounds.
 template <int D>

@@ -47,6 +47,7 @@ struct SimulationConfig {
   // A uniform external acceleration g [m/s^2] (D entries; all zero = off),
   // e.g. [0, -9.81] in 2-D; its potential energy -m g.x is in conserved.csv.
   std::array<double, 3> gravity{};
+  bool allow_overlap = false;               // bodies may overlap (else an error, docs/scene.md)
 };
 
 struct ArtificialViscosity {
@@ -207,6 +208,9 @@ struct OutputConfig {
   std::string name = "snapshot";  // snapshot files NAME.NNNN.h5
   double interval = 0;            // [s]; 0 = only initial and final
   bool snapshots = true;
+  // [s] time between rows of conserved.csv (plus the last step); 0 = every
+  // step; default end_time / 1e4 (set by the parser).
+  double conserved_interval = 0;
 };
 
 // [gravity]: self-gravity (3-D, open boundaries only); docs/scene.md.
