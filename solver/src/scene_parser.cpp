@@ -174,7 +174,8 @@ std::string apply_override(toml::table& root, const std::string& text, const std
         throw InputError(file, shown,
                          "--set '" + text + "': '" + shown + "' is an array; index an array of tables " +
                              "as in bodies.0.spacing=..., or set the whole array as in " + shown + "=[...]");
-      const std::size_t idx = std::stoul(parts[i + 1]);
+      // (more than 9 digits is out of range anyway, and would overflow stoul)
+      const std::size_t idx = parts[i + 1].size() > 9 ? arr->size() : std::stoul(parts[i + 1]);
       if (idx >= arr->size())
         throw InputError(file, shown,
                          "--set '" + text + "': index " + parts[i + 1] + " is out of range ('" + shown +

@@ -234,6 +234,7 @@ TEST(eos_tillotson, CompressedClosedFormsAgreeWithEachOtherAndWithFiniteDifferen
   // PHYSICS.md §3: the two forms of the compressed-branch c² are equal and
   // both match the definition; the compressed branch formula is also the
   // expanded-cold one, so it is checked over η ∈ [0.3, 5].
+  // (init-captures [&t = t]: clang 14 cannot capture a structured binding)
   for (const auto& [name, t] : kTable)
     for (double eta : linspace(0.3, 5.0, 95))
       for (double u : u_grid(t, 33)) {
@@ -247,7 +248,7 @@ TEST(eos_tillotson, CompressedClosedFormsAgreeWithEachOtherAndWithFiniteDifferen
         const double terms = (t.A + 2 * t.B * std::fabs(eta - 1)) / t.rho0 + t.A * eta * eta / rho +
                              std::fabs(p) / rho * (1 + t.a + t.b) + 2 * u * (t.a + t.b);
         ASSERT_LE(std::fabs(f1 - f2) / terms, 1e-13) << name << " eta=" << eta << " u=" << u;
-        auto pc = [&](double r, double uu) { return double(tillotson_compressed(t, Real(r), Real(uu)).p); };
+        auto pc = [&, &t = t](double r, double uu) { return double(tillotson_compressed(t, Real(r), Real(uu)).p); };
         const SoundSpeedFd fd = sound_speed2_fd(pc, rho, u, kStep * rho, kStep * std::max(u, double(t.E_iv)));
         ASSERT_LE(std::fabs(f1 - fd.c2) / (std::fabs(fd.c2) + 1e-6 * t.A / t.rho0), kFdTolerance)
             << name << " eta=" << eta << " u=" << u;
@@ -315,8 +316,8 @@ TEST(eos_tillotson, PressureIsContinuousAcrossRegimeBoundaries) {
   // 1e-9 and 2e-9 (relative) on its side, which removes the slope's share of
   // the plain difference p(b+δ) − p(b−δ).
   for (const auto& [name, t] : kTable) {
-    auto p = [&](double rho, double u) { return double(tillotson_evaluate(t, rho, u).p); };
-    auto jump = [&](auto&& f, double b) {
+    auto p = [&, &t = t](double rho, double u) { return double(tillotson_evaluate(t, rho, u).p); };
+    auto jump = [&, &t = t](auto&& f, double b) {
       const double d = 1e-9 * b;
       const double above = 2 * f(b + d) - f(b + 2 * d), below = 2 * f(b - d) - f(b - 2 * d);
       return std::fabs(above - below) / (std::fabs(f(b)) + 1e-6 * t.A);

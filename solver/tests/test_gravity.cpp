@@ -45,7 +45,11 @@ Cloud ball(std::size_t n, double R, Vec<3> c, double eps0, std::uint64_t seed) {
   std::uniform_real_distribution<double> u(-1, 1), w(0.5, 1.5);
   Cloud s;
   while (s.x.size() < n) {
-    const Vec<3> p = vec(u(rng), u(rng), u(rng));
+    // drawn in an explicit order (z, y, x: what g++ did with the former
+    // vec(u(rng), u(rng), u(rng)), whose argument order C++ leaves open),
+    // so every compiler builds the same cloud
+    const double pz = u(rng), py = u(rng), px = u(rng);
+    const Vec<3> p = vec(px, py, pz);
     if (norm2(p) > 1) continue;
     s.x.push_back(c + p * Real(R));
     s.m.push_back(Real(w(rng) / double(n)));
@@ -290,7 +294,10 @@ TEST(DirectGravity, TwoParticlesExact) {
   s.eps = {8, 6};
   const Field g = direct(s);
   const double want = 0.5 * (gravity_softened(KernelType::CubicSpline, 5, 8).g + gravity_softened(KernelType::CubicSpline, 5, 6).g);
-  EXPECT_NEAR(g.a[0][0], 3 * want * 3, 8 * kEps * 3 * want * 3);
+  // a round-off allowance: the two paths evaluate the softened-gravity
+  // polynomials in different orders, and their terms cancel inside the
+  // kernel (q = 0.63, 0.83): under 8 ulp with g++ 12, 9.5 ulp with clang 14
+  EXPECT_NEAR(g.a[0][0], 3 * want * 3, 32 * kEps * 3 * want * 3);
 }
 
 TEST(DirectGravity, MomentumConservedAndEnergyIsThePairSum) {

@@ -329,6 +329,9 @@ TEST(Scene, SetOverrideRejectsUnknownKey) {
   expect_error(kMinimal, "simulation.end_tim", "--set simulation.end_tim=1", {"simulation.end_tim=1"});
   expect_error(kMinimal, "bodies[0].spacin", "did you mean '--set bodies.0.spacing=...'", {"bodies.0.spacin=1"});
   expect_error(kMinimal, "", "expected dotted.key=value", {"simulation.end_time"});
+  // an index too large for any integer type is out of range, not a crash
+  // (found by fuzz/scene_fuzzer.cpp)
+  expect_error(kMinimal, "bodies", "is out of range", {"bodies.66666666666666666666666666666666666661.spacing=1"});
 }
 
 TEST(Scene, SetOverrideValueIsValidated) {
