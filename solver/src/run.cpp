@@ -324,7 +324,6 @@ class CpuStepper {
       if (f.snapshot) std::visit([&](auto member) { good_.*member = ps_.*member; }, f.member);
   }
   const ParticleStore<D>& last_good() const { return good_; }
-  static constexpr bool keeps_last_good = true;
   std::size_t size() const { return ps_.n; }
   std::int64_t bytes_downloaded() const { return 0; }  // the state never leaves the host
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
@@ -451,22 +450,18 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   double next_checkpoint = opt.checkpoint_every_seconds > 0 ? last_wall + opt.checkpoint_every_seconds : 0;
   std::string stopped, checkpoint;
 
-  // A step that failed: the last good state (the CPU backend keeps one;
-  // on the CUDA backend, the failing state) goes to NAME.failed.h5, and the
-  // message names what failed, in which particle, when.
+  // A step that failed: the last good state (the stepper's copy from
+  // before the step) goes to NAME.failed.h5, and the message names what
+  // failed, in which particle (of the failing state), when.
   double good_t = t;
   std::int64_t good_step = step;
   auto fail = [&](const std::string& what) {
     const std::string detail = first_fault<D>(sys.host(), body_first);
-    std::string where;
-    if constexpr (Stepper::keeps_last_good) {
-      const std::string file = out.diagnostic(sys.last_good(), good_t, good_step);
-      if (!file.empty())
-        where = "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) + ") is in " + file;
-    } else {
-      const std::string file = out.diagnostic(sys.host(), t, step);
-      if (!file.empty()) where = "; the state at the failure is in " + file;
-    }
+    const std::string file = out.diagnostic(sys.last_good(), good_t, good_step);
+    const std::string where =
+        file.empty() ? std::string()
+                     : "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) +
+                           ") is in " + file;
     return RunError(what + (detail.empty() ? "" : ": " + detail) + where);
   };
 

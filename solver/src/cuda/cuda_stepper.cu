@@ -200,6 +200,31 @@ class DeviceStore {
     for (const Field& f : o.fields_) fields_.push_back(Field{f.name, DeviceBuffer(n_ * f.elem), f.elem});
   }
 
+  // The snapshot fields of `o` (the field table's `snapshot` flag), device
+  // to device; allocated on the first call. The state check's last good
+  // state (CudaStepper::keep_good).
+  void copy_snapshot_fields_from(const DeviceStore& o) {
+    if (fields_.empty()) {
+      n_ = o.n_;
+      for (const Field& f : o.fields_)
+        for (const auto& t : field_table<D>())
+          if (t.snapshot && t.name == f.name) fields_.push_back(Field{f.name, DeviceBuffer(n_ * f.elem), f.elem});
+    }
+    for (Field& f : fields_)
+      for (const Field& g : o.fields_)
+        if (g.name == f.name)
+          RUBBLE_CUDA(cudaMemcpy(f.buf.get(), g.buf.get(), n_ * f.elem, cudaMemcpyDeviceToDevice));
+  }
+  // A host store holding exactly this store's fields, n entries each.
+  void allocate_host(ParticleStore<D>& ps) const {
+    ps.n = n_;
+    for (const auto& t : field_table<D>())
+      std::visit([&](auto member) {
+        for (const Field& f : fields_)
+          if (f.name == t.name) (ps.*member).resize(n_);
+      }, t.member);
+  }
+
   // New element i of every field is old element perm[i] (perm on the device).
   void permute(const std::uint32_t* perm, DeviceBuffer& scratch) {
     for (Field& f : fields_) {
@@ -445,6 +470,8 @@ struct CudaStepper<D>::Impl {
   DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
+  DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
+  ParticleStore<D> good_host;    // last_good(): their host copy
   DeviceOctree octree;  // Barnes-Hut (3-D)
   std::int64_t fallbacks_total = 0, evaluations = 0;
   bool host_current = true;
@@ -890,6 +917,18 @@ const ParticleStore<D>& CudaStepper<D>::host() {
     impl_->host_current = true;
   }
   return impl_->host;
+}
+
+template <int D>
+void CudaStepper<D>::keep_good() {
+  impl_->good.copy_snapshot_fields_from(impl_->store);
+}
+
+template <int D>
+const ParticleStore<D>& CudaStepper<D>::last_good() {
+  if (impl_->good_host.n != impl_->n()) impl_->good.allocate_host(impl_->good_host);
+  impl_->bytes_downloaded += std::int64_t(impl_->good.download(impl_->good_host));
+  return impl_->good_host;
 }
 
 template <int D>

@@ -40,10 +40,11 @@ class CudaStepper {
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   const ParticleStore<D>& host();  // downloads the device state into ps
-  // The state check's last good state is not kept on the device (it would
-  // cost a copy of the store): a failed step writes the failing state.
-  void keep_good() {}
-  static constexpr bool keeps_last_good = false;
+  // The state check's last good state: the snapshot fields copied on the
+  // device before each step (no host traffic), downloaded by last_good()
+  // only when a step failed.
+  void keep_good();
+  const ParticleStore<D>& last_good();
   std::size_t size() const;        // the particle count (no download)
   std::int64_t bytes_downloaded() const;  // device-to-host bytes of host() so far
   std::int64_t correction_fallbacks() const;
