@@ -38,7 +38,7 @@ ConservedLog::ConservedLog(const std::string& path, int dimension)
   file_.reset(std::fopen(path_.c_str(), "w"));
   if (!file_) throw std::runtime_error("conserved log '" + path_ + "': cannot create: " + std::strerror(errno));
   if (std::fprintf(file_.get(), "%s\n", header(dim_).c_str()) < 0 || std::fflush(file_.get()) != 0)
-    throw std::runtime_error("conserved log '" + path_ + "': writing the header failed");
+    throw std::runtime_error("conserved log '" + path_ + "': writing the header failed: " + std::strerror(errno));
 }
 
 ConservedLog::ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step)

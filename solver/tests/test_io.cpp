@@ -610,6 +610,19 @@ TEST(ConservedLog, UnwritablePathThrows) {
   EXPECT_THROW(ConservedLog("/nonexistent_dir_rubble/conserved.csv", 3), std::runtime_error);
 }
 
+// A full disk (/dev/full: every write fails with ENOSPC) is reported with
+// the OS's reason (issue #13 item 6).
+TEST(ConservedLog, FullDiskGivesTheReason) {
+  if (access("/dev/full", W_OK) != 0) GTEST_SKIP() << "no writable /dev/full on this system";
+  try {
+    ConservedLog log("/dev/full", 2);
+    log.append(ConservedRecord{});
+    ADD_FAILURE() << "writing to /dev/full must fail";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("No space left on device"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MeasureConserved, ThreeParticles3D) {
   ParticleStore<3> ps;
   ps.allocate(3, FieldNeeds{});
