@@ -329,11 +329,7 @@ void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::ve
   cells.build(ps.x.data(), reach.data(), n, bounding_box<D>(ps.x.data(), n, domain));
   NeighborLists nb;
   cells.find_neighbors(nb);
-  auto body_of = [&](std::size_t i) {
-    std::size_t k = 0;
-    while (k + 2 < body_first.size() && std::int64_t(ps.id[i]) >= body_first[k + 1]) ++k;
-    return k;
-  };
+  auto body_of = [&](std::size_t i) { return body_of_id(body_first, ps.id[i]); };
   for (std::size_t a = 0; a < n; ++a)
     for (std::uint32_t j = nb.offset[a]; j < nb.offset[a + 1]; ++j) {
       const std::size_t b = nb.index[j];

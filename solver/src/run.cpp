@@ -343,8 +343,7 @@ class CpuStepper {
 template <int D>
 std::string describe_particle(const ParticleStore<D>& ps, std::size_t i, const std::vector<std::int64_t>& body_first) {
   const std::int64_t id = ps.id.empty() ? std::int64_t(i) : ps.id[i];
-  std::size_t body = 0;
-  while (body + 2 < body_first.size() && id >= body_first[body + 1]) ++body;
+  const std::size_t body = body_of_id(body_first, id);
   const std::int64_t first = body_first.empty() ? 0 : body_first[body];
   std::string text = "particle " + std::to_string(id - first) + " of bodies[" + std::to_string(body) + "] (id " +
                      std::to_string(id) + ") at x = (";
@@ -403,9 +402,7 @@ void check_initial_state(const Scene& scene, const ParticleStore<D>& ps, const s
   std::size_t i = 0;
   const std::string what = first_fault<D>(ps, body_first, &fault, &i);
   if (what.empty()) return;
-  const std::int64_t id = ps.id[i];
-  std::size_t body = 0;
-  while (body + 2 < body_first.size() && id >= body_first[body + 1]) ++body;
+  const std::size_t body = body_of_id(body_first, ps.id[i]);
   const BodyConfig& b = scene.bodies[body];
   std::string key = "bodies[" + std::to_string(body) + "]";
   if (fault == kFaultVelocity) key += ".velocity";

@@ -65,6 +65,19 @@ void expect_same_bits(const ParticleStore<D>& a, const ParticleStore<D>& b) {
         f.member);
 }
 
+// Snapshot `file` of the runs in directories a and b, every field read
+// back with its restart group: bit for bit the same. Returns their metadata.
+template <int D>
+std::pair<SnapshotMeta, SnapshotMeta> expect_same_snapshot(const fs::path& a, const fs::path& b,
+                                                           const std::string& file) {
+  ParticleStore<D> pa, pb;
+  SnapshotMeta ma, mb;
+  read_restart<D>((a / file).string(), pa, ma);
+  read_restart<D>((b / file).string(), pb, mb);
+  expect_same_bits<D>(pa, pb);
+  return {ma, mb};
+}
+
 // Run `text` (output every end_time/4) to its end; resume from snapshot
 // `from` (or from the checkpoint a wall-time stop wrote) in a new
 // directory; the final snapshots must agree bit for bit.
@@ -85,14 +98,10 @@ void expect_restart_identical(const std::string& text, const std::string& name, 
   EXPECT_EQ(resumed.steps, whole.steps);
   EXPECT_EQ(resumed.time, whole.time);
 
-  ParticleStore<D> pa, pb;
-  SnapshotMeta ma, mb;
-  read_restart<D>((a / last).string(), pa, ma);
-  read_restart<D>((b / last).string(), pb, mb);
+  const auto [ma, mb] = expect_same_snapshot<D>(a, b, last);
   EXPECT_EQ(ma.time, mb.time);
   EXPECT_EQ(ma.step, mb.step);
   EXPECT_EQ(ma.restart.dt_proposal, mb.restart.dt_proposal);
-  expect_same_bits<D>(pa, pb);
   // conserved.csv: the old rows up to the restart step, then the same rows
   EXPECT_EQ(slurp(a / "conserved.csv"), slurp(b / "conserved.csv"));
   // no snapshot before the restart point is rewritten into the new directory
@@ -127,12 +136,8 @@ void expect_checkpoint_identical(const std::string& text, const std::string& nam
   resume.restart_from = stopped.checkpoint;
   run_scene(load_restart_scene(stopped.checkpoint), resume);
   const std::string last = snapshot_filename(scene.output.name, 4);
-  ParticleStore<D> pa, pb;
-  SnapshotMeta ma, mb;
-  read_restart<D>((a / last).string(), pa, ma);
-  read_restart<D>((b / last).string(), pb, mb);
+  const auto [ma, mb] = expect_same_snapshot<D>(a, b, last);
   EXPECT_EQ(ma.step, mb.step);
-  expect_same_bits<D>(pa, pb);
   EXPECT_EQ(slurp(a / "conserved.csv"), slurp(b / "conserved.csv"));
   // resumed into its own directory: the index lists every snapshot once
   const std::string xdmf = slurp(b / (scene.output.name + ".xdmf"));
@@ -228,11 +233,7 @@ TEST(Restart, PeriodicCheckpointsResumeIdentically) {
   RunOptions resume = into(b);
   resume.restart_from = checkpoint;
   run_scene(load_restart_scene(checkpoint), resume);
-  ParticleStore<2> pa, pb;
-  SnapshotMeta ma, mb;
-  read_restart<2>((a / snapshot_filename(scene.output.name, 4)).string(), pa, ma);
-  read_restart<2>((b / snapshot_filename(scene.output.name, 4)).string(), pb, mb);
-  expect_same_bits<2>(pa, pb);
+  expect_same_snapshot<2>(a, b, snapshot_filename(scene.output.name, 4));
   if (!::testing::Test::HasFailure()) {
     fs::remove_all(a);
     fs::remove_all(b);

@@ -8,6 +8,7 @@
 
 #include "rubble/drivers/state_check.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/scene/initial_conditions.hpp"
 
 using namespace rubble;
 
@@ -97,4 +98,15 @@ TEST(StateCheck, UnallocatedFieldsAreSkipped) {
   ps.rho[0] = 1;
   ps.h[0] = 0.1;
   EXPECT_EQ(fault_of(ps), kStateOk);
+}
+
+// Messages name a particle's body from its id (generate_bodies' body_first).
+TEST(StateCheck, BodyOfId) {
+  const std::vector<std::int64_t> first = {0, 10, 10, 25};  // body 1 is empty
+  EXPECT_EQ(body_of_id(first, 0), 0u);
+  EXPECT_EQ(body_of_id(first, 9), 0u);
+  EXPECT_EQ(body_of_id(first, 10), 2u);
+  EXPECT_EQ(body_of_id(first, 24), 2u);
+  EXPECT_EQ(body_of_id({}, 5), 0u);
+  EXPECT_EQ(body_of_id({0, 7}, 3), 0u);
 }

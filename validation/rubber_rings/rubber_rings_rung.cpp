@@ -213,13 +213,7 @@ int run(const Args& args) {
   // the rebound check is strict: exactly zero does not count
   if (rebound <= 0) checks[2].value = std::min(rebound, -1e-300);
   bool ok = true;
-  std::vector<Json> cj;
-  for (const Check& c : checks) {
-    cj.push_back(c.json());
-    ok = ok && c.passed();
-    std::printf("  %s %s: %.4g (%s %.4g)\n", c.passed() ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
-                c.threshold);
-  }
+  const Json checks_json = rubble::verification::judge_checks(checks, ok);
 
   // density strip: four outputs spread over the run
   std::vector<Json> strip;
@@ -248,7 +242,7 @@ int run(const Args& args) {
       {"backend", rubble::backend_name(rubble::default_backend())},
       {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
       {"commit", RUBBLE_COMMIT},
-      {"checks", Json::array(cj)},
+      {"checks", checks_json},
       {"energy_history", Json::object({{"t", et}, {"kinetic", ekin}, {"internal", eint}, {"total", etot}})},
       {"outputs", Json::object({{"t", ot}, {"vcom_left", vl}, {"vcom_right", vr}, {"min_pair_over_dx", mp},
                                 {"bodies", nb}, {"momentum_ratio", mom}})},

@@ -86,6 +86,20 @@ struct Check {
   }
 };
 
+// Print each check (PASS/FAIL, value, criterion) and return them as a
+// record's "checks" array; `all_passed` says whether every one passed.
+inline Json judge_checks(const std::vector<Check>& checks, bool& all_passed) {
+  all_passed = true;
+  std::vector<Json> items;
+  for (const Check& c : checks) {
+    items.push_back(c.json());
+    all_passed = all_passed && c.passed();
+    std::printf("  %s %s: %.4g (%s %.4g)\n", c.passed() ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
+                c.threshold);
+  }
+  return Json::array(items);
+}
+
 inline void write_record(const std::filesystem::path& dir, const std::string& file_stem, const Json& record) {
   std::filesystem::create_directories(dir);
   std::ofstream f(dir / (file_stem + ".json"));

@@ -110,13 +110,7 @@ int run(const Args& args) {
     checks.push_back({std::string("energy drift max|E(t) - E(0)| / ") + (ke0 > 0 ? "KE(0)" : "|E(0)|"), drift,
                       args.energy_bound, "<=", src_energy});
   bool ok = true;
-  std::vector<Json> cj;
-  for (const Check& c : checks) {
-    cj.push_back(c.json());
-    ok = ok && c.passed();
-    std::printf("  %s %s: %.4g (%s %.4g)\n", c.passed() ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
-                c.threshold);
-  }
+  const Json checks_json = rubble::verification::judge_checks(checks, ok);
   const Json record = Json::object({
       {"rung", "stress"},
       {"case", args.label},
@@ -130,7 +124,7 @@ int run(const Args& args) {
       {"backend", rubble::backend_name(rubble::default_backend())},
       {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
       {"commit", RUBBLE_COMMIT},
-      {"checks", Json::array(cj)},
+      {"checks", checks_json},
       {"notes", completed ? std::string("reached end_time after ") + std::to_string(fs.steps) + " steps"
                           : "stopped: " + stop},
       {"energy_history", Json::object({{"t", t}, {"total", total}})},

@@ -1,5 +1,6 @@
 #pragma once
 // Initial-condition generators: turn the scene's [[bodies]] into particles.
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -24,6 +25,13 @@ double lattice_cell_volume(Lattice lattice, double dx);
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps);
+
+// The body that generated particle `id`, from generate_bodies' `first`
+// (body k holds ids [first[k], first[k + 1])); 0 if `first` is empty.
+inline std::size_t body_of_id(const std::vector<std::int64_t>& first, std::int64_t id) {
+  if (first.size() < 2) return 0;
+  return std::size_t(std::upper_bound(first.begin() + 1, first.end() - 1, id) - (first.begin() + 1));
+}
 
 // ---- resource guards (issue #13) ----
 
