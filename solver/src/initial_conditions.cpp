@@ -14,6 +14,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/neighbors/cell_list.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
+#include "rubble/physics/kernels.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/reference/lane_emden.hpp"
 
@@ -119,6 +120,37 @@ std::vector<Vec<D>> polytrope_points(const BodyConfig& b, const Polytrope& model
 
 }  // namespace
 
+// [[energy_deposits]] (scene.hpp): add E to the free particles within the
+// radius, weighted by w_a (the cubic spline of support `radius`, or 1), as
+// specific energy E w_a / sum_b m_b w_b, so that sum_a m_a du_a = E exactly
+// (up to rounding).
+template <int D>
+void apply_energy_deposits(const Scene& scene, ParticleStore<D>& ps) {
+  const Box<D> domain = domain_from_scene<D>(scene);
+  for (std::size_t k = 0; k < scene.energy_deposits.size(); ++k) {
+    const EnergyDepositConfig& e = scene.energy_deposits[k];
+    Vec<D> c;
+    for (int a = 0; a < D; ++a) c[a] = Real(e.center[a]);
+    std::vector<double> w(ps.n, 0.0);
+    double mass_weight = 0;
+    for (std::size_t i = 0; i < ps.n; ++i) {
+      if (!ps.boundary.empty() && ps.boundary[i] != kFreeParticle) continue;
+      const double r = double(norm(domain.separation(ps.x[i], c)));
+      if (r >= e.radius) continue;
+      w[i] = e.profile == DepositProfile::Kernel ? double(kernel_w<D>(KernelType::CubicSpline, Real(r), Real(e.radius)))
+                                                 : 1.0;
+      mass_weight += double(ps.m[i]) * w[i];
+    }
+    const std::string key = "energy_deposits[" + std::to_string(k) + "]";
+    if (!(mass_weight > 0))
+      throw InputError(scene.file, key + ".radius",
+                       "is " + fmt_g(e.radius) + ", but no free particle lies closer than that to the centre: "
+                       "the energy would go nowhere (make the radius at least the particle spacing)");
+    for (std::size_t i = 0; i < ps.n; ++i)
+      if (w[i] > 0) ps.u[i] += Real(e.energy * w[i] / mass_weight);
+  }
+}
+
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps) {
@@ -213,6 +245,7 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
       ++next;
     }
   }
+  apply_energy_deposits<D>(scene, ps);
   return first;
 }
 

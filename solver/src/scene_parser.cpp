@@ -382,6 +382,7 @@ class SceneReader {
   void check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m, double rho,
                                 double pressure) const;
   void read_domain(const toml::table& t, DomainConfig& d);
+  EnergyDepositConfig read_energy_deposit(const std::string& p, const toml::table& t);
   void read_output(const toml::table& t, OutputConfig& o);
   // self-gravity (issue #5)
   void read_gravity(const toml::table& t, GravityConfig& g);
@@ -1057,6 +1058,21 @@ void SceneReader::read_domain(const toml::table& t, DomainConfig& d) {
   }
 }
 
+EnergyDepositConfig SceneReader::read_energy_deposit(const std::string& p, const toml::table& t) {
+  check_keys(t, p, {"energy", "center", "radius", "profile"});
+  EnergyDepositConfig e;
+  e.energy = required_number(t, "energy", p, "the energy added, in J");
+  require(e.energy > 0, t, "energy", p, e.energy, "> 0");
+  const auto c = vector(t, "center", p);
+  if (!c) fail(sub(p, "center"), "missing required key (where the energy goes, one coordinate per axis)");
+  e.center = *c;
+  e.radius = required_number(t, "radius", p, "the radius the energy is spread over, in m");
+  require(e.radius > 0, t, "radius", p, e.radius, "> 0");
+  e.profile = choice<DepositProfile>(t, "profile", p, DepositProfile::Kernel,
+                                     {{"kernel", DepositProfile::Kernel}, {"uniform", DepositProfile::Uniform}});
+  return e;
+}
+
 void SceneReader::read_output(const toml::table& t, OutputConfig& o) {
   const std::string p = "output";
   check_keys(t, p, {"name", "interval", "snapshots", "conserved_interval"});
@@ -1182,7 +1198,7 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
 Scene SceneReader::read(const toml::table& root) {
   Scene scene;
   scene.file = file_;
-  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity"});
+  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits"});
   read_simulation(root, scene.simulation);
   if (const toml::table* g = table(root, "gravity", "")) read_gravity(*g, scene.gravity);
 
@@ -1219,6 +1235,16 @@ Scene SceneReader::read(const toml::table& root) {
   }
 
   if (const toml::table* d = table(root, "domain", "")) read_domain(*d, scene.domain);
+  if (const toml::node* deposits = root.get("energy_deposits")) {
+    const toml::array* arr = deposits->as_array();
+    if (!arr) fail("energy_deposits", "expected an array of tables: write [[energy_deposits]]", deposits);
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string p = "energy_deposits[" + std::to_string(i) + "]";
+      const toml::table* t = (*arr)[i].as_table();
+      if (!t) fail(p, "expected a table, got " + type_name((*arr)[i]), &(*arr)[i]);
+      scene.energy_deposits.push_back(read_energy_deposit(p, *t));
+    }
+  }
   const toml::table* out_table = table(root, "output", "");
   if (out_table) read_output(*out_table, scene.output);
   // Resource guards (issue #13): a bounded number of snapshots, and a

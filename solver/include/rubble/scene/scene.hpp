@@ -238,6 +238,21 @@ struct LibraryText {
   std::string text;
 };
 
+// [[energy_deposits]]: energy added to the particles' internal energy at
+// t = 0, e.g. the point blast of the Sedov-Taylor rung or an explosion
+// source (docs/scene.md). profile "kernel": weights W(r, radius/2) of the
+// cubic spline, whose support ends at `radius` (the form of Phantom's sedov
+// set-up); "uniform": equal specific energy within `radius`. Either way the
+// weights are normalised by mass so that exactly `energy` is added.
+enum class DepositProfile : int { Kernel = 0, Uniform = 1 };
+
+struct EnergyDepositConfig {
+  double energy = 0;                // [J] (> 0)
+  std::array<double, 3> center{};   // [m] (first D used; minimum image on periodic axes)
+  double radius = 0;                // [m] (> 0)
+  DepositProfile profile = DepositProfile::Kernel;
+};
+
 struct Scene {
   std::string file;     // where it came from (for messages)
   std::string text;     // full scene text after --set overrides (stored in snapshots)
@@ -250,6 +265,7 @@ struct Scene {
   DomainConfig domain;
   OutputConfig output;
   GravityConfig gravity;
+  std::vector<EnergyDepositConfig> energy_deposits;
 };
 
 }  // namespace rubble
