@@ -1,7 +1,7 @@
 // The `rubble` command-line program.
 //
 //   rubble run SCENE.toml [--out DIR] [--backend cpu] [--set key=value ...] [--quiet]
-//              [--max-wall-time T] [--checkpoint-every T]
+//              [--max-wall-time T] [--checkpoint-every T] [--timings]
 //   rubble run --restart DIR/NAME.NNNN.h5 [--out DIR] [--set simulation.end_time=T ...]
 //   rubble info
 //   rubble eos MATERIAL --rho A:B:N --u C:D:M[:log] [--format table|csv] [--set key=value ...]
@@ -54,6 +54,7 @@ struct RunArgs {
   std::vector<std::string> sets;
   std::string max_wall_time, checkpoint_every;
   bool quiet = false;
+  bool timings = false;  // --timings
 };
 
 // A wall-clock duration: seconds ("3600", "90.5") or H:MM:SS ("11:55:00",
@@ -169,6 +170,11 @@ int run_command(const RunArgs& args) {
   if (!args.quiet)
     std::cout << "rubble: done: t = " << final_state.time << " s after " << final_state.steps << " steps in "
               << final_state.wall_seconds << " s; output in " << out.string() << "\n";
+  if (args.timings) {
+    std::printf("rubble: where the time went (wall seconds, share of %.3g s):\n", final_state.wall_seconds);
+    for (const auto& [phase, seconds] : final_state.phase_seconds)
+      std::printf("  %-40s %10.3f  %5.1f %%\n", phase.c_str(), seconds, 100 * seconds / final_state.wall_seconds);
+  }
   return 0;
 }
 
@@ -332,6 +338,9 @@ int main(int argc, char** argv) {
                   "(value parsed as TOML, else taken as a string; repeatable)")
       ->allow_extra_args(false);
   run->add_flag("-q,--quiet", run_args.quiet, "No progress output");
+  run->add_flag("--timings", run_args.timings,
+                "At the end, print where the wall time went: set-up, neighbour search, density, EOS, forces, "
+                "integration, output, ...");
 
   app.add_subcommand("info", "Show version, backends, precision, OpenMP threads and GPU");
 

@@ -1,6 +1,7 @@
 #include "hydro_cpu.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -12,6 +13,21 @@
 #include "rubble/scene/materials.hpp"
 
 namespace rubble {
+
+namespace {
+// Adds the wall time of its scope to `sum`.
+class ScopedSeconds {
+ public:
+  explicit ScopedSeconds(double& sum) : sum_(sum), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedSeconds() { sum_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ScopedSeconds(const ScopedSeconds&) = delete;
+  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
+
+ private:
+  double& sum_;
+  std::chrono::steady_clock::time_point start_;
+};
+}  // namespace
 
 PorosityParams porosity_params_from_config(const PorosityConfig& c) {
   PorosityParams p{};
@@ -105,6 +121,7 @@ void HydroCpu<D>::sort_particles() {
 
 template <int D>
 void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius) {
+  const ScopedSeconds timer(phases_.neighbours);
   const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
   try {
     cells_.build(ps_.x.data(), search_radius.data(), ps_.n, box);
@@ -159,12 +176,15 @@ void HydroCpu<D>::summation_density_and_h() {
     build_neighbors(search_radius_);
     const RhsContext<D> c = context();
     int outgrown = 0;
+    {
+      const ScopedSeconds timer(phases_.density);
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : outgrown)
-    for (std::size_t a = 0; a < n; ++a) {
-      const std::uint32_t ia = static_cast<std::uint32_t>(a);
-      if (!summation_density_particle<D>(c, ia, search_radius_[a], ListNeighbors{nbrs_, ia})) {
-        search_radius_[a] = kSkin * ps_.h[a];
-        ++outgrown;
+      for (std::size_t a = 0; a < n; ++a) {
+        const std::uint32_t ia = static_cast<std::uint32_t>(a);
+        if (!summation_density_particle<D>(c, ia, search_radius_[a], ListNeighbors{nbrs_, ia})) {
+          search_radius_[a] = kSkin * ps_.h[a];
+          ++outgrown;
+        }
       }
     }
     // The force loop needs all pairs within max(h_a, h_b): the lists hold
@@ -178,8 +198,11 @@ template <int D>
 void HydroCpu<D>::h_from_continuity_density() {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
+  {
+    const ScopedSeconds timer(phases_.density);
 #pragma omp parallel for if (n > 4096)
-  for (std::size_t a = 0; a < n; ++a) h_from_density_particle<D>(c, static_cast<std::uint32_t>(a));
+    for (std::size_t a = 0; a < n; ++a) h_from_density_particle<D>(c, static_cast<std::uint32_t>(a));
+  }
   build_neighbors(ps_.h);
 }
 
@@ -269,6 +292,8 @@ void HydroCpu<D>::body_force() {
 
 template <int D>
 void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
+  if (!(porosity_ || plasticity_ || shifting_ > Real(0))) return;
+  const ScopedSeconds timer(phases_.end_step);
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
   if (porosity_) {
@@ -330,8 +355,12 @@ void HydroCpu<D>::evaluate() {
   ++evaluations_;
   if (summation_) summation_density_and_h();
   else h_from_continuity_density();
-  equation_of_state();
-  if (plasticity_) plastic_return(false);
+  {
+    const ScopedSeconds timer(phases_.eos);
+    equation_of_state();
+    if (plasticity_) plastic_return(false);
+  }
+  const ScopedSeconds timer(phases_.forces);
   if (wall_extrapolation_) wall_extrapolation();
   if (solid_) solid_rates();  // the feature set is fixed for the run
   else rates();

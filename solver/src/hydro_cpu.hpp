@@ -18,6 +18,16 @@
 
 namespace rubble {
 
+// Wall seconds spent in each part of the right-hand side, summed over the
+// run (what `rubble run --timings` and the benchmarks print).
+struct RhsPhaseSeconds {
+  double neighbours = 0;  // cell list build and neighbour lists
+  double density = 0;     // summation density and h (or h from continuity density)
+  double eos = 0;         // pressure and sound speed (and the plastic return in an evaluation)
+  double forces = 0;      // rates: pressure, viscosity, conductivity, stress, gravity, XSPH, walls
+  double end_step = 0;    // porosity, plasticity and shifting after a step
+};
+
 template <int D>
 class HydroCpu {
  public:
@@ -48,6 +58,7 @@ class HydroCpu {
   // over all evaluations), and the same for the last evaluation.
   std::int64_t correction_fallbacks() const { return fallbacks_total_; }
   std::int64_t correction_fallbacks_last() const { return fallbacks_last_; }
+  const RhsPhaseSeconds& phase_seconds() const { return phases_; }
 
  private:
   RhsContext<D> context();  // pointers into the store: valid until it is resized
@@ -88,6 +99,7 @@ class HydroCpu {
   bool porosity_ = false, plasticity_ = false, body_force_ = false, wall_extrapolation_ = false;
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;
+  RhsPhaseSeconds phases_;
 };
 
 }  // namespace rubble

@@ -329,6 +329,7 @@ class CpuStepper {
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
   std::int64_t evaluations() const { return sys_.evaluations(); }
   bool solid() const { return sys_.solid(); }
+  const RhsPhaseSeconds& rhs_phase_seconds() const { return sys_.phase_seconds(); }
   static constexpr const char* name = "cpu";
 
  private:
@@ -462,17 +463,31 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     return RunError(what + (detail.empty() ? "" : ": " + detail) + where);
   };
 
+  // where the time goes (FinalState::phase_seconds)
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
+  double set_up = wall(), t_sort = 0, t_limit = 0, t_checks = 0, t_step = 0, t_output = 0;
+  constexpr bool kRhsPhases = requires { sys.rhs_phase_seconds(); };
+  RhsPhaseSeconds rhs_before{};
+  if constexpr (kRhsPhases) rhs_before = sys.rhs_phase_seconds();
+
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
   while (t < t_end * (1 - 1e-12)) {
     if (step >= sim.max_steps)
       throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t) + " s");
     // Sorting permutes every field, rates included, so the state needs no
     // new evaluation; neighbour lists are rebuilt at each evaluation anyway.
+    auto t0 = Clock::now();
     if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
+    t_sort += since(t0);
+    t0 = Clock::now();
     sys.keep_good();
+    t_checks += since(t0);
     good_t = t;
     good_step = step;
+    t0 = Clock::now();
     const double limit = sys.dt_limit();
+    t_limit += since(t0);
     double dt = std::min(limit, loop.next_output - t);
     // the step the physics allows, before it is shortened to land on an
     // output or the end of damping: what simulation.dt_min bounds
@@ -480,6 +495,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
     if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
     const double t_before = t;
+    t0 = Clock::now();
     try {
       if (sim.integrator == Integrator::Leapfrog) {
         sys.leapfrog(dt);
@@ -495,6 +511,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       // inside the step: the neighbour search or the smoothing-length iteration
       throw fail(std::string(e.what()) + " in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s");
     }
+    t_step += since(t0);
     t += dt;
     ++step;
     // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
@@ -502,8 +519,10 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
 
     // checked where the state lives (a device reduction on the CUDA backend):
     // the host copy is fetched only for a snapshot, a diagnostic or the end
+    t0 = Clock::now();
     if (sys.first_non_finite() < sys.size())
       throw fail("the state check failed at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")");
+    t_checks += since(t0);
     if (dt_physics < dt_min && t < t_end * (1 - 1e-12)) {
       const std::string file = out.diagnostic(sys.host(), t, step);
       throw RunError("time step collapsed to " + fmt_g(dt_physics) + " s < dt_min = " + fmt_g(dt_min) +
@@ -516,6 +535,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     // of t alone, so a resumed run logs the same rows), at every snapshot
     // and at the end
     const double ci = scene.output.conserved_interval;
+    t0 = Clock::now();
     if (out.enabled() && (ci <= 0 || std::floor(t / ci) != std::floor(t_before / ci) || output_time ||
                           t >= t_end * (1 - 1e-12)))
       out.log(sys.conserved(t, step, dt));
@@ -523,6 +543,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       loop.next_output = std::min(loop.next_output + out_interval, t_end);
       if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
     }
+    t_output += since(t0);
 
     const double now = wall();
     slowest_step = std::max(slowest_step, now - last_wall);
@@ -532,18 +553,38 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
       stopped = "the wall-time limit";
     if (!stopped.empty()) {
+      t0 = Clock::now();
       checkpoint = out.checkpoint(sys.host(), t, step, loop);
+      t_output += since(t0);
       break;
     }
     if (next_checkpoint > 0 && now >= next_checkpoint) {
+      t0 = Clock::now();
       out.checkpoint(sys.host(), t, step, loop);
+      t_output += since(t0);
       next_checkpoint = wall() + opt.checkpoint_every_seconds;
     }
   }
   progress.finish();
 
-  const ParticleStore<D>& ps = sys.host();
   FinalState fs;
+  fs.phase_seconds = {{"set-up", set_up}, {"sort", t_sort}, {"time-step limit", t_limit}, {"state checks", t_checks}};
+  if constexpr (kRhsPhases) {
+    const RhsPhaseSeconds& r = sys.rhs_phase_seconds();
+    const double nb = r.neighbours - rhs_before.neighbours, de = r.density - rhs_before.density,
+                 eo = r.eos - rhs_before.eos, fo = r.forces - rhs_before.forces, es = r.end_step - rhs_before.end_step;
+    fs.phase_seconds.insert(fs.phase_seconds.end(), {{"neighbour search", nb},
+                                                     {"density and h", de},
+                                                     {"EOS", eo},
+                                                     {"forces", fo},
+                                                     {"end of step", es},
+                                                     {"integration", t_step - (nb + de + eo + fo + es)}});
+  } else {
+    fs.phase_seconds.push_back({"step (right-hand side and integration)", t_step});
+  }
+  fs.phase_seconds.push_back({"output", t_output});
+
+  const ParticleStore<D>& ps = sys.host();
   fs.backend = Stepper::name;
   fs.device_to_host_bytes = sys.bytes_downloaded();
   fs.dimension = D;

@@ -257,6 +257,28 @@ TEST_F(Cli, RunsTinySceneIntoNewDirectory) {
   EXPECT_FALSE(fs::is_empty(dir_ / "fresh" / "run1"));
 }
 
+// --timings (issue #14 item 7): the split of the wall time into the
+// loop's parts, each a number of seconds and a share, the shares adding up
+// to at most the whole run.
+TEST_F(Cli, TimingsSplitTheWallTime) {
+  write_scene("tiny.toml", kValid);
+  const Result r = rubble("run tiny.toml --quiet --timings --out timed");
+  ASSERT_EQ(r.code, 0) << r.err;
+  double share_sum = 0;
+  for (const char* phase : {"set-up", "neighbour search", "density and h", "EOS", "forces", "integration", "output"}) {
+    const auto at = r.out.find(std::string("  ") + phase + " ");
+    ASSERT_NE(at, std::string::npos) << phase << " missing in:\n" << r.out;
+    const auto line_end = r.out.find('\n', at);
+    const std::string line = r.out.substr(at, line_end - at);
+    const auto pct = line.rfind('%');
+    ASSERT_NE(pct, std::string::npos) << line;
+    const auto start = line.find_last_of(' ', pct - 2);
+    share_sum += std::stod(line.substr(start + 1, pct - start - 2));
+  }
+  EXPECT_GT(share_sum, 0.0);
+  EXPECT_LE(share_sum, 100.5);  // each share rounded to 0.1 %
+}
+
 // SIGTERM and SIGINT (real signals, issue #13): the current step ends, a
 // checkpoint is written, no temporary file stays, the message says how to
 // resume, the exit code is 4; resuming from the checkpoint runs on.

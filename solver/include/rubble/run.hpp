@@ -4,6 +4,7 @@
 // a rung exercises exactly the pipeline a user runs.
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rubble/scene/scene.hpp"
@@ -94,6 +95,13 @@ struct FinalState {
   // the identity was used, out of all particle evaluations of the run.
   std::int64_t correction_fallbacks = 0;
   std::int64_t particle_evaluations = 0;
+  // Where the wall time went, in seconds, in the order the loop does it:
+  // set-up (scene to first evaluation), then per step the sort, the
+  // time-step limit, the state checks, the step itself split into the
+  // right-hand side's parts (neighbour search, density and h, EOS, forces,
+  // end of step; CPU backend only) and the integration (the rest of the
+  // step), and output. `rubble run --timings` prints it.
+  std::vector<std::pair<std::string, double>> phase_seconds;
   // Why the run stopped before end_time ("SIGINT", "SIGTERM", "the wall-time
   // limit"), or empty when it reached end_time; then `checkpoint` is the
   // snapshot to resume from.
