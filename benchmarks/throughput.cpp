@@ -243,7 +243,7 @@ struct Result {
 // ---- time-stepped cases (hydro3d, rings) --------------------------------------
 
 // The Courant step of the initial state: the smallest over the bodies of
-// C hM / (c + 1.2 alpha c) (physics/timestep.hpp with mu = 0: bodies at
+// C hM / (c + 0.6 alpha c) (physics/timestep.hpp with mu = 0: bodies at
 // rest relative to themselves), c the sound speed of the body's density and
 // internal energy (the longitudinal wave speed for solids), hM the Monaghan
 // smoothing length of its lattice. An estimate only: the run's own limit

