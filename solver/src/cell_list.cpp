@@ -197,8 +197,9 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
 template <int D>
 void CellList<D>::find_neighbors(NeighborLists& out) const {
   const std::size_t n = x_.size();
-  out.offset.assign(n + 1, 0);
-  out.index.clear();
+  out.begin_.assign(n, 0);
+  out.count_.assign(n, 0);
+  out.owner_.assign(n, 0);
   if (n == 0) return;
 
   // Squared distance between two boxes (a point is a box with lo == hi).
@@ -223,13 +224,14 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   Real half[D];
   for (int k = 0; k < D; ++k) half[k] = Real(0.5) * (box.hi[k] - box.lo[k]);
 
-  // Pass 1: each thread appends the lists of the particles of its groups to
-  // its own buffer and notes where each list is.
+  // Each thread appends the lists of the particles of its groups to its
+  // own buffer (kept from the last search) and notes where each list is.
   const int threads = max_threads();
-  std::vector<std::vector<std::uint32_t>> buffers(threads);
-  std::vector<std::size_t> start(n);
-  std::vector<std::uint32_t> count(n);
-  std::vector<int> owner(n);
+  if (threads > 65535) throw std::length_error("CellList::find_neighbors: more than 65535 threads");
+  if (int(out.buffers_.size()) < threads) out.buffers_.resize(threads);
+  std::uint32_t* begin = out.begin_.data();
+  std::uint32_t* count = out.count_.data();
+  std::uint16_t* owner = out.owner_.data();
 
 #pragma omp parallel num_threads(threads)
   {
@@ -237,11 +239,14 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
     // buf grows but never shrinks; `used` entries are valid. Room for a
     // whole cell is made before testing it, so that the test can write
     // every candidate and advance only on a hit (no branch to mispredict).
-    std::vector<std::uint32_t>& buf = buffers[t];
+    std::vector<std::uint32_t>& buf = out.buffers_[t];
     std::size_t used = 0;
     std::vector<std::uint32_t> near;  // cells within reach of the current group
 
-#pragma omp for schedule(dynamic, 2)
+    // static: each thread takes the same run of groups in every search, so
+    // its buffer's size settles (with dynamic scheduling a buffer would grow
+    // to the most any search ever gave its thread, up to all the lists)
+#pragma omp for schedule(static)
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       const Node& g = nodes[groups_[gi]];
 
@@ -267,7 +272,15 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
           const std::size_t room = used + (m.end - m.begin);
-          if (buf.size() < room) buf.resize(std::max(2 * buf.size(), room + 4096));
+          if (buf.size() < room) {
+            // a quarter more: the spare room stays small, and a run's
+            // buffers stop growing after its first searches
+            if (room > std::numeric_limits<std::uint32_t>::max())
+              throw std::length_error("CellList::find_neighbors: more than 2^32 - 1 neighbour entries in one thread");
+            const std::size_t grown = std::max(buf.size() + buf.size() / 4, room + 4096);
+            buf.reserve(grown);  // exactly (resize alone may double the capacity)
+            buf.resize(grown);
+          }
           std::uint32_t* out = buf.data() + used;
           std::size_t hits = 0;
           // If no coordinate difference to this cell can exceed L/2, the
@@ -294,29 +307,12 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
         // Ascending input index (already so when the input was in spatial order).
         const auto list = buf.begin() + std::ptrdiff_t(first), list_end = buf.begin() + std::ptrdiff_t(used);
         if (!std::is_sorted(list, list_end)) std::sort(list, list_end);
-        start[a] = first;
-        count[a] = std::uint32_t(used - first);
-        owner[a] = t;
+        const std::uint32_t i = order[a];  // input index
+        begin[i] = std::uint32_t(first);
+        count[i] = std::uint32_t(used - first);
+        owner[i] = std::uint16_t(t);
       }
     }
-  }
-
-  // Offsets in input order.
-  std::uint64_t total = 0;
-  for (std::size_t s = 0; s < n; ++s) out.offset[order_[s] + 1] = count[s];
-  for (std::size_t i = 0; i < n; ++i) {
-    total += out.offset[i + 1];
-    if (total > std::numeric_limits<std::uint32_t>::max())
-      throw std::length_error("CellList::find_neighbors: more than 2^32 - 1 neighbour entries");
-    out.offset[i + 1] = std::uint32_t(total);
-  }
-
-  // Pass 2: copy the lists into place.
-  out.index.resize(total);
-#pragma omp parallel for schedule(static)
-  for (std::size_t s = 0; s < n; ++s) {
-    const std::uint32_t* src = buffers[owner[s]].data() + start[s];
-    std::copy(src, src + count[s], out.index.begin() + out.offset[order_[s]]);
   }
 }
 

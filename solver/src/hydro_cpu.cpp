@@ -139,7 +139,9 @@ struct ListNeighbors {
   std::uint32_t a;
   template <class F>
   void operator()(F&& f) const {
-    for (std::uint32_t k = nbrs.offset[a]; k < nbrs.offset[a + 1]; ++k) f(nbrs.index[k]);
+    const std::uint32_t* list = nbrs.list(a);
+    const std::size_t count = nbrs.count(a);
+    for (std::size_t k = 0; k < count; ++k) f(list[k]);
   }
 };
 

@@ -364,8 +364,8 @@ void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::ve
   cells.find_neighbors(nb);
   auto body_of = [&](std::size_t i) { return body_of_id(body_first, ps.id[i]); };
   for (std::size_t a = 0; a < n; ++a)
-    for (std::uint32_t j = nb.offset[a]; j < nb.offset[a + 1]; ++j) {
-      const std::size_t b = nb.index[j];
+    for (std::size_t j = 0; j < nb.count(a); ++j) {
+      const std::size_t b = nb.list(a)[j];
       if (b <= a) continue;
       const std::size_t ka = body_of(a), kb = body_of(b);
       if (ka == kb) continue;

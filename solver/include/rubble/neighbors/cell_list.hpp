@@ -37,13 +37,40 @@
 
 namespace rubble {
 
-// Compressed rows: the neighbours of particle i are
-// index[offset[i] .. offset[i+1]), in ascending order.
-struct NeighborLists {
-  std::vector<std::uint32_t> offset, index;
+// The neighbour lists of n particles, each in ascending order, as the
+// search threads wrote them: particle i's list is `count(i)` indices from
+// `list(i)` in the buffer of the thread that found them. Nothing is copied
+// into one array (that copy doubled the peak memory of the lists), and the
+// buffers persist from one search to the next, growing by a quarter when a
+// search needs more, so a run settles at about 1.0-1.25 times the lists'
+// size (issue #14: memory per particle).
+class NeighborLists {
+ public:
+  std::size_t size() const { return begin_.size(); }
+  std::size_t count(std::size_t i) const { return count_[i]; }
+  const std::uint32_t* list(std::size_t i) const { return buffers_[owner_[i]].data() + begin_[i]; }
+  // particle i's list as a vector (tests, rare uses)
+  std::vector<std::uint32_t> copy(std::size_t i) const { return {list(i), list(i) + count(i)}; }
+  // entries over all lists
+  std::size_t total() const {
+    std::size_t t = 0;
+    for (std::uint32_t c : count_) t += c;
+    return t;
+  }
+  // bytes held: buffers (with their spare room) and the per-particle index
+  std::size_t bytes() const {
+    std::size_t b = begin_.capacity() * sizeof(std::uint32_t) + count_.capacity() * sizeof(std::uint32_t) +
+                    owner_.capacity() * sizeof(std::uint16_t);
+    for (const auto& buf : buffers_) b += buf.capacity() * sizeof(std::uint32_t);
+    return b;
+  }
 
-  std::size_t count(std::size_t i) const { return offset[i + 1] - offset[i]; }
-  std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
+ private:
+  template <int D>
+  friend class CellList;
+  std::vector<std::vector<std::uint32_t>> buffers_;  // one per search thread
+  std::vector<std::uint32_t> begin_, count_;         // per particle, in input order
+  std::vector<std::uint16_t> owner_;                 // the buffer holding the list
 };
 
 template <int D>
