@@ -174,6 +174,10 @@ int run_command(const RunArgs& args) {
     std::printf("rubble: where the time went (wall seconds, share of %.3g s):\n", final_state.wall_seconds);
     for (const auto& [phase, seconds] : final_state.phase_seconds)
       std::printf("  %-40s %10.3f  %5.1f %%\n", phase.c_str(), seconds, 100 * seconds / final_state.wall_seconds);
+    if (final_state.neighbour_searches >= 0)
+      std::printf("  neighbour searches: %lld in %lld evaluations\n",
+                  static_cast<long long>(final_state.neighbour_searches),
+                  static_cast<long long>(final_state.particle_evaluations / std::max<std::size_t>(1, final_state.m.size())));
   }
   return 0;
 }

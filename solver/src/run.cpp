@@ -330,6 +330,7 @@ class CpuStepper {
   std::int64_t evaluations() const { return sys_.evaluations(); }
   bool solid() const { return sys_.solid(); }
   const RhsPhaseSeconds& rhs_phase_seconds() const { return sys_.phase_seconds(); }
+  std::int64_t neighbour_searches() const { return sys_.neighbor_rebuilds(); }
   static constexpr const char* name = "cpu";
 
  private:
@@ -579,6 +580,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
                                                      {"forces", fo},
                                                      {"end of step", es},
                                                      {"integration", t_step - (nb + de + eo + fo + es)}});
+    fs.neighbour_searches = sys.neighbour_searches();
   } else {
     fs.phase_seconds.push_back({"step (right-hand side and integration)", t_step});
   }

@@ -102,6 +102,10 @@ struct FinalState {
   // end of step; CPU backend only) and the integration (the rest of the
   // step), and output. `rubble run --timings` prints it.
   std::vector<std::pair<std::string, double>> phase_seconds;
+  // neighbour searches over the run (an evaluation searches once, or again
+  // when a smoothing length outgrows its search radius); -1 where the
+  // backend does not count them
+  std::int64_t neighbour_searches = -1;
   // Why the run stopped before end_time ("SIGINT", "SIGTERM", "the wall-time
   // limit"), or empty when it reached end_time; then `checkpoint` is the
   // snapshot to resume from.
