@@ -256,7 +256,6 @@ int main(int argc, char** argv) try {
         {"checks", check_json},
         {"profile", Json::object({{"x", pr}, {"rho", prho}, {"v", pv}, {"p", pp},
                                   {"exact", Json::object({{"x", er}, {"rho", erho}, {"v", ev}, {"p", ep}})}})},
-        {"units", Json::object({{"x", "r"}})},
     });
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_%04d", args.label.c_str(), static_cast<int>(res));
