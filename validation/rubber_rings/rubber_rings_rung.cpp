@@ -31,10 +31,6 @@
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 
-#ifndef RUBBLE_COMMIT
-#define RUBBLE_COMMIT "unknown"
-#endif
-
 namespace {
 
 using rubble::verification::Check;

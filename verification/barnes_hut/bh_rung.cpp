@@ -56,10 +56,6 @@
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
 
-#ifndef RUBBLE_COMMIT
-#define RUBBLE_COMMIT "unknown"
-#endif
-
 using rubble::MultipoleOrder;
 using rubble::Real;
 using rubble::Vec;

@@ -11,7 +11,20 @@
 #include <string>
 #include <vector>
 
+// The commit a record names (set by the build for every target; a build
+// outside git says "unknown").
+#ifndef RUBBLE_COMMIT
+#define RUBBLE_COMMIT "unknown"
+#endif
+
 namespace rubble::verification {
+
+// The --set overrides of a run as one string, for a record's parameters.
+inline std::string joined(const std::vector<std::string>& items) {
+  std::string s;
+  for (const auto& x : items) s += (s.empty() ? "" : " ") + x;
+  return s;
+}
 
 // A JSON value built from nested maps/vectors, printed in key order.
 class Json {

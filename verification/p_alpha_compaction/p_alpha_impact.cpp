@@ -42,10 +42,6 @@
 #include "rubble/run.hpp"
 #include "rubble/scene/materials.hpp"
 
-#ifndef RUBBLE_COMMIT
-#define RUBBLE_COMMIT "unknown"
-#endif
-
 using rubble::verification::Check;
 using rubble::verification::Json;
 using namespace rubble;

@@ -38,10 +38,6 @@
 #include "rubble/run.hpp"
 #include "sedov_measure.hpp"
 
-#ifndef RUBBLE_COMMIT
-#define RUBBLE_COMMIT "unknown"
-#endif
-
 namespace {
 
 using rubble::verification::Check;
@@ -73,12 +69,6 @@ Args parse_args(int argc, char** argv) {
   if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
   rubble::verification::require_increasing_whole(a.resolutions, 8, "particles per side");
   return a;
-}
-
-std::string joined(const std::vector<std::string>& items) {
-  std::string s;
-  for (const auto& x : items) s += (s.empty() ? "" : " ") + x;
-  return s;
 }
 
 Json measures_json(const rubble::verification::SedovMeasures& m) {
@@ -235,7 +225,7 @@ int main(int argc, char** argv) try {
                                      {"E", E},
                                      {"rho0", rho0},
                                      {"scene", args.scene.substr(args.scene.find_last_of('/') + 1)},
-                                     {"overrides", joined(args.sets)},
+                                     {"overrides", rubble::verification::joined(args.sets)},
                                      {"t", fs.time}})},
         {"resolution", res},
         {"resolution_name", "1/dx"},

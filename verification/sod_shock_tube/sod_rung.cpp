@@ -68,15 +68,6 @@ Args parse_args(int argc, char** argv) {
 }
 
 
-std::string joined(const std::vector<std::string>& items) {
-  std::string s;
-  for (const auto& x : items) {
-    if (!s.empty()) s += ' ';
-    s += x;
-  }
-  return s;
-}
-
 struct Errors {
   double rho = 0, v = 0, p = 0, u = 0;
   std::size_t count = 0;
@@ -190,7 +181,7 @@ int main(int argc, char** argv) try {
         {"case", args.label},
         {"parameters", Json::object({{"gamma", gamma},
                                      {"scene", args.scene.substr(args.scene.find_last_of('/') + 1)},
-                                     {"overrides", joined(args.sets)},
+                                     {"overrides", rubble::verification::joined(args.sets)},
                                      {"t", fs.time}})},
         {"resolution", res},
         {"resolution_name", three_d ? "1/dx_L" : "N_L"},

@@ -27,10 +27,6 @@
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 
-#ifndef RUBBLE_COMMIT
-#define RUBBLE_COMMIT "unknown"
-#endif
-
 namespace {
 
 using rubble::verification::Check;
