@@ -57,6 +57,17 @@ PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   }
 }
 
+DamageParams damage_params_from_config(const DamageConfig& c) {
+  DamageParams d{};
+  d.enabled = c.enabled;
+  if (!c.enabled) return d;
+  d.weibull_k = Real(c.weibull_k);
+  d.weibull_m = Real(c.weibull_m);
+  d.crack_speed = Real(c.crack_speed);
+  d.deviatoric = c.deviatoric;
+  return d;
+}
+
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
   std::vector<MaterialParams> out;
   for (const auto& m : scene.materials) {
@@ -70,6 +81,7 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     p.as_exponent = as ? Real(m.artificial_stress.n) : Real(0);
     p.porosity = porosity_params_from_config(m.porosity);
     p.plasticity = plasticity_params_from_config(m.plasticity);
+    p.damage = damage_params_from_config(m.damage);
     // dp: the lattice spacing of the first body of this material (the
     // artificial stress's W(dp); Gray, Monaghan & Swift 2001)
     p.dp = 0;
@@ -105,6 +117,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   if (solid_ && artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
   porosity_ = f.porosity;
   plasticity_ = f.plasticity;
+  damage_ = f.damage;
   body_force_ = f.body_force;
   wall_extrapolation_ = f.wall_extrapolation;
   for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
@@ -294,7 +307,7 @@ void HydroCpu<D>::body_force() {
 
 template <int D>
 void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
-  if (!(porosity_ || plasticity_ || shifting_ > Real(0))) return;
+  if (!(porosity_ || plasticity_ || damage_ || shifting_ > Real(0))) return;
   const ScopedSeconds timer(phases_.end_step);
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
@@ -302,7 +315,11 @@ void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
 #pragma omp parallel for if (n > 4096)
     for (std::size_t a = 0; a < n; ++a) porosity_end_step_particle<D>(c, static_cast<std::uint32_t>(a), alpha_start);
   }
-  if (plasticity_ || porosity_) {
+  if (damage_) {
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) damage_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
+  }
+  if (plasticity_ || porosity_ || damage_) {
     // The pressure of the final state: the plastic return works at fixed p,
     // and the stored p, c_s of a leapfrog step then belong to the state it
     // returns (snapshots, the next step limit), not to its predicted state.

@@ -17,6 +17,7 @@
 #include "rubble/physics/kernels.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/reference/lane_emden.hpp"
+#include "rubble/scene/flaws.hpp"
 
 namespace rubble {
 
@@ -151,6 +152,29 @@ void apply_energy_deposits(const Scene& scene, ParticleStore<D>& ps) {
   }
 }
 
+// Weibull flaws (scene/flaws.hpp) for every free body whose material has
+// tensile damage; the body's volume is the sum of its particles' m/rho
+// (times a unit depth in 1-D and 2-D, physics/damage.hpp), its stream the
+// body's index. Walls and other materials keep 0 flaws (no damage).
+template <int D>
+void draw_body_flaws(const Scene& scene, const std::vector<std::int64_t>& first, ParticleStore<D>& ps) {
+  if (ps.flaw_count.empty()) return;
+  for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
+    const BodyConfig& b = scene.bodies[k];
+    const DamageConfig& dc = scene.materials[b.material_id].damage;
+    if (!dc.enabled || b.boundary != BoundaryKind::None) continue;
+    const std::size_t i0 = std::size_t(first[k]), n = std::size_t(first[k + 1] - first[k]);
+    double volume = 0;
+    for (std::size_t i = i0; i < i0 + n; ++i) volume += double(ps.m[i]) / double(ps.rho[i]);
+    const FlawSet f = draw_weibull_flaws(n, dc.weibull_k, dc.weibull_m, volume, std::uint64_t(dc.seed), k);
+    for (std::size_t j = 0; j < n; ++j) {
+      ps.flaw_count[i0 + j] = f.count[j];
+      ps.flaw_eps_min[i0 + j] = Real(f.eps_min[j]);
+      ps.flaw_eps_max[i0 + j] = Real(f.eps_max[j]);
+    }
+  }
+}
+
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps) {
@@ -246,6 +270,7 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
     }
   }
   apply_energy_deposits<D>(scene, ps);
+  draw_body_flaws<D>(scene, first, ps);
   return first;
 }
 

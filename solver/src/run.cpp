@@ -646,6 +646,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     // every Drucker-Prager material stores eps_v: its tension-cracking
     // opening persists (and so does dilatant flow, psi > 0)
     needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
+    needs.damage = needs.damage || m.damage.enabled;
   }
   ParticleStore<D> ps;
   LoopStart start;

@@ -376,6 +376,7 @@ class SceneReader {
   void read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o);
   void read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   void read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m);
+  void read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m);
   std::string resolve_library(const std::string& spec, const std::string& key, const toml::node* where) const;
   void record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file);
   BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
@@ -648,7 +649,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   // has no tension cut-off)
   std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
                                     "p_min",  "cs_min",        "shear_modulus",    "artificial_stress",
-                                    "porosity", "plasticity"};
+                                    "porosity", "plasticity", "damage"};
   if (m.eos == EosType::IdealGas) known.push_back("gamma");
   if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
   if (m.eos == EosType::Tillotson) known.push_back("tillotson");
@@ -720,6 +721,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   }
   if (const toml::table* q = table(t, "porosity", p)) read_porosity(*q, sub(p, "porosity"), m);
   if (const toml::table* q = table(t, "plasticity", p)) read_plasticity(*q, sub(p, "plasticity"), m);
+  if (const toml::table* q = table(t, "damage", p)) read_damage(*q, sub(p, "damage"), m);
   return m;
 }
 
@@ -795,6 +797,33 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
   }
   if (!(m.shear_modulus > 0))
     fail(qp, "plasticity acts on solids only; give the material a shear_modulus > 0 (a fluid has no deviatoric stress)");
+}
+
+// damage = { model = "grady_kipp", weibull_k, weibull_m, crack_speed, deviatoric, seed }
+// (issue #18; Benz & Asphaug 1994, 1995; docs/scene.md).
+void SceneReader::read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m) {
+  DamageConfig& c = m.damage;
+  const auto model = string(q, "model", qp);
+  if (!model) fail(sub(qp, "model"), "missing required key (the damage model; \"grady_kipp\")");
+  choice(q, "model", qp, 0, {{"grady_kipp", 0}});
+  check_keys(q, qp, {"model", "weibull_k", "weibull_m", "crack_speed", "deviatoric", "seed"});
+  c.enabled = true;
+  c.weibull_k = required_number(q, "weibull_k", qp, "the Weibull coefficient k [m^-3] of n(eps) = k eps^m");
+  require(c.weibull_k > 0, q, "weibull_k", qp, c.weibull_k, "> 0 [m^-3]");
+  c.weibull_m = required_number(q, "weibull_m", qp, "the Weibull exponent m of n(eps) = k eps^m");
+  require(c.weibull_m > 0, q, "weibull_m", qp, c.weibull_m, "> 0 (rocks: 6-12)");
+  if (auto x = number(q, "crack_speed", qp)) {
+    require(*x > 0 && *x <= 1, q, "crack_speed", qp, *x,
+            "in (0, 1] (the crack speed as a fraction of the longitudinal sound speed; 0.4 in Benz & Asphaug 1994)");
+    c.crack_speed = *x;
+  }
+  if (auto b = boolean(q, "deviatoric", qp)) c.deviatoric = *b;
+  if (auto n = integer(q, "seed", qp)) {
+    if (*n < 0) fail(sub(qp, "seed"), "is " + std::to_string(*n) + ", must be >= 0", q.get("seed"));
+    c.seed = *n;
+  }
+  if (!(m.shear_modulus > 0))
+    fail(qp, "damage acts on solids only; give the material a shear_modulus > 0 (a fluid carries no tension to break)");
 }
 
 MaterialConfig SceneReader::read_library_material(const std::string& name, const toml::table& t) {

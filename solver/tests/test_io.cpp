@@ -78,6 +78,7 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.porosity = true;    // alpha (a snapshot field) and dalphadt
   needs.plasticity = true;  // eps_p (a snapshot field)
   needs.inelastic_volume = true;  // eps_v (a snapshot field)
+  needs.damage = true;  // damage_root, the flaws and flaws_active (snapshot fields)
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -96,6 +97,11 @@ ParticleStore<D> make_store(std::size_t n) {
     for (int a = 0; a < D; ++a)
       for (int b = 0; b < D; ++b) ps.S[i].m[a][b] = Real(0.3) * Real(i) + Real(a) - Real(b) / Real(3);
     ps.boundary[i] = static_cast<std::int32_t>(i % 2);
+    ps.damage_root[i] = Real(0.01) * Real(i);
+    ps.flaw_count[i] = static_cast<std::int32_t>(1 + i % 4);
+    ps.flaw_eps_min[i] = Real(1e-4) / Real(1 + i);
+    ps.flaw_eps_max[i] = Real(2e-4) / Real(1 + i);
+    ps.flaws_active[i] = Real(i % 4);
   }
   return ps;
 }
@@ -227,7 +233,7 @@ TYPED_TEST(SnapshotTest, FileLayoutAndAttributes) {
       EXPECT_EQ(dims[2], hsize_t(D)) << name;
     }
     const hid_t type = H5Dget_type(dset);
-    if (name == "material_id" || name == "id" || name == "boundary") {
+    if (name == "material_id" || name == "id" || name == "boundary" || name == "flaw_count") {
       EXPECT_GT(H5Tequal(type, H5T_NATIVE_INT32), 0);
     } else {
       EXPECT_EQ(H5Tget_size(type), sizeof(Real)) << name;
@@ -253,6 +259,11 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.alpha.clear();     // no porosity
   ps.eps_p.clear();     // no plasticity
   ps.eps_v.clear();     // no dilatancy
+  ps.damage_root.clear();  // no damage
+  ps.flaw_count.clear();
+  ps.flaw_eps_min.clear();
+  ps.flaw_eps_max.clear();
+  ps.flaws_active.clear();
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;

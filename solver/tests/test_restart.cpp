@@ -194,6 +194,20 @@ std::string granular_scene() {
          "[output]\ninterval = 0.005\n";
 }
 
+// A brittle block pulled apart (tensile damage with Weibull flaws): the
+// resumed run must continue with the same flaws and damage.
+std::string damage_scene(const std::string& integrator) {
+  std::string s = "[simulation]\ndimension = 2\nend_time = 0.8\nintegrator = \"" + integrator +
+                  "\"\n[materials.rock]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n"
+                  "shear_modulus = 0.5\ndamage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, seed = 5 }\n";
+  for (int half = 0; half < 2; ++half)
+    s += "[[bodies]]\nshape = \"box\"\nmaterial = \"rock\"\nmin = [" + std::string(half ? "0.5" : "0.0") +
+         ", 0.0]\nmax = [" + std::string(half ? "1.0" : "0.5") +
+         ", 0.4]\nspacing = 0.05\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = [" + std::string(half ? "0.1" : "-0.1") +
+         ", 0.0]\n";
+  return s + "[output]\ninterval = 0.2\n";
+}
+
 // A self-gravitating polytrope (Barnes-Hut).
 std::string gravity_scene(const std::string& integrator) {
   return "[simulation]\ndimension = 3\nend_time = 0.2\nintegrator = \"" + integrator +
@@ -210,6 +224,8 @@ TEST(Restart, HydroRk2IsBitIdentical) { expect_restart_identical<2>(hydro_scene(
 TEST(Restart, SolidLeapfrogIsBitIdentical) { expect_restart_identical<2>(solid_scene("leapfrog"), "solid_lf", 2); }
 TEST(Restart, SolidRk2IsBitIdentical) { expect_restart_identical<2>(solid_scene("rk2_adaptive"), "solid_rk2", 3); }
 TEST(Restart, GranularWallsAndShiftingAreBitIdentical) { expect_restart_identical<2>(granular_scene(), "granular", 2); }
+TEST(Restart, DamageLeapfrogIsBitIdentical) { expect_restart_identical<2>(damage_scene("leapfrog"), "damage_lf", 2); }
+TEST(Restart, DamageRk2IsBitIdentical) { expect_restart_identical<2>(damage_scene("rk2_adaptive"), "damage_rk2", 2); }
 TEST(Restart, SelfGravityLeapfrogIsBitIdentical) { expect_restart_identical<3>(gravity_scene("leapfrog"), "grav_lf", 2); }
 TEST(Restart, SelfGravityRk2IsBitIdentical) { expect_restart_identical<3>(gravity_scene("rk2_adaptive"), "grav_rk2", 1); }
 

@@ -455,7 +455,7 @@ struct CudaStepper<D>::Impl {
   KernelType kernel;
   Real hfact, courant, force_factor, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
-  bool porosity = false, plasticity = false, body_force = false, wall_extrapolation = false;
+  bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
   GravityConfig gravity;
   DeviceArray<Mat<D>> art_R;
@@ -467,7 +467,7 @@ struct CudaStepper<D>::Impl {
   GridNeighbors<D> grid{};
   // integrator scratch
   DeviceArray<Vec<D>> v_half, shift;  // shift: particle shifting
-  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start;
+  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start, damage_half;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
   DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
@@ -501,6 +501,7 @@ struct CudaStepper<D>::Impl {
     kernel_correction = f.kernel_correction;
     porosity = f.porosity;
     plasticity = f.plasticity;
+    damage = f.damage;
     wall_extrapolation = f.wall_extrapolation;
     body_force = f.body_force;
     for (int k = 0; k < D; ++k) g[k] = Real(scene.simulation.gravity[k]);
@@ -757,7 +758,10 @@ struct CudaStepper<D>::Impl {
       for_each_index("end-of-step porosity", n(), [=] __device__(std::size_t i) {
         porosity_end_step_particle<D>(c, std::uint32_t(i), alpha_start);
       });
-    if (plasticity || porosity)
+    if (damage)
+      for_each_index("end-of-step damage cap", n(),
+                     [=] __device__(std::size_t i) { damage_end_step_particle<D>(c, std::uint32_t(i)); });
+    if (plasticity || porosity || damage)
       for_each_index("end-of-step equation of state", n(),
                      [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
     if (plasticity)
@@ -801,8 +805,13 @@ struct CudaStepper<D>::Impl {
       alpha_start.resize(count);
       RUBBLE_CUDA(cudaMemcpy(alpha_start.data(), s.alpha, count * sizeof(Real), cudaMemcpyDeviceToDevice));
     }
-    const LeapfrogHalf<D> half{v_half.data(), u_half.data(), s.drhodt ? rho_half.data() : nullptr,
-                               s.dSdt ? S_half.data() : nullptr, s.dalphadt ? alpha_half.data() : nullptr};
+    if (s.ddamage_root_dt) damage_half.resize(count);
+    const LeapfrogHalf<D> half{v_half.data(),
+                               u_half.data(),
+                               s.drhodt ? rho_half.data() : nullptr,
+                               s.dSdt ? S_half.data() : nullptr,
+                               s.dalphadt ? alpha_half.data() : nullptr,
+                               s.ddamage_root_dt ? damage_half.data() : nullptr};
     const Box<D> dom = domain;
     for_each_index("leapfrog kick-drift", count,
                    [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });

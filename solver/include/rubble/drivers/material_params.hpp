@@ -5,6 +5,7 @@
 
 #include "rubble/core/real.hpp"
 #include "rubble/physics/artificial_viscosity.hpp"
+#include "rubble/physics/damage.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/plasticity.hpp"
 #include "rubble/physics/porosity.hpp"
@@ -23,14 +24,17 @@ struct MaterialParams {
   Real dp;             // initial particle spacing of the material's bodies
   PorosityParams porosity;      // p-alpha (porosity.enabled = false: not porous)
   PlasticityParams plasticity;  // model None: elastic (or fluid)
+  DamageParams damage;          // enabled = false: no tensile damage
 };
 
 // The device-ready porosity and plasticity parameters of a validated
 // material (hydro_cpu.cpp).
 struct PorosityConfig;
 struct PlasticityConfig;
+struct DamageConfig;
 PorosityParams porosity_params_from_config(const PorosityConfig& c);
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
+DamageParams damage_params_from_config(const DamageConfig& c);
 
 // One entry per scene material, in material_id order (hydro_cpu.cpp).
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene);

@@ -15,6 +15,7 @@
 #include "rubble/drivers/state_check.hpp"
 #include "rubble/particles/store_view.hpp"
 #include "rubble/physics/artificial_stress.hpp"
+#include "rubble/physics/damage.hpp"
 #include "rubble/physics/hydro.hpp"
 #include "rubble/physics/jaumann_rate.hpp"
 #include "rubble/physics/kernel_gradient_correction.hpp"
@@ -174,37 +175,58 @@ RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint3
   c.s.h[a] = h_from_density<D>(c.hfact, c.s.m[a], c.s.rho[a]);
 }
 
-// Pressure and sound speed from the material's equation of state; for a
-// porous material p = p_s(alpha rho, u)/alpha (physics/porosity.hpp).
+// Pressure and c_s^2 of particle a's intact material from its equation of
+// state; for a porous material p = p_s(alpha rho, u)/alpha
+// (physics/porosity.hpp). Drucker-Prager materials' inelastic volume change
+// (cracking, dilatancy): the EOS sees the elastic density rho exp(eps_v).
+template <int D>
+RUBBLE_HD_INLINE EosState intact_eos_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const MaterialParams& mat = c.mat[c.s.material_id[a]];
+  const Real rho = c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
+  if (mat.porosity.enabled) {
+    const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, rho, c.s.u[a], c.s.alpha[a]);
+    return EosState{e.p, e.c2};
+  }
+  return eos_evaluate(mat.eos, rho, c.s.u[a]);
+}
+
+// Damage D = delta^d of particle a (0 for materials without damage).
+template <int D>
+RUBBLE_HD_INLINE Real damage_particle(const RhsContext<D>& c, std::uint32_t a) {
+  return c.s.damage_root && c.mat[c.s.material_id[a]].damage.enabled ? damage_from_root<D>(c.s.damage_root[a])
+                                                                     : Real(0);
+}
+
+// Pressure and sound speed: the intact material's, with a damaged
+// material's tension carried by its intact fraction (physics/damage.hpp).
 template <int D>
 RUBBLE_HD_INLINE void eos_particle(const RhsContext<D>& c, std::uint32_t a) {
   if (c.s.boundary && c.s.boundary[a] == kBoundaryExtrapolated) return;  // p, c_s from wall_extrapolation_particle
-  const MaterialParams& mat = c.mat[c.s.material_id[a]];
-  // inelastic volume change (cracking, dilatancy): the EOS sees the elastic density rho exp(eps_v)
-  const Real rho = c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
-  Real p, c2;
-  if (mat.porosity.enabled) {
-    const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, rho, c.s.u[a], c.s.alpha[a]);
-    p = e.p;
-    c2 = e.c2;
-  } else {
-    const EosState e = eos_evaluate(mat.eos, rho, c.s.u[a]);
-    p = e.p;
-    c2 = e.c2;
-  }
-  c.s.p[a] = p;
-  c.s.cs[a] = std::sqrt(c2 > Real(0) ? c2 : Real(0));
+  const EosState e = intact_eos_particle<D>(c, a);
+  c.s.p[a] = c.s.damage_root ? damaged_pressure(e.p, damage_particle<D>(c, a)) : e.p;
+  c.s.cs[a] = std::sqrt(e.c2 > Real(0) ? e.c2 : Real(0));
 }
 
 // ---- porosity and plasticity (per particle, no neighbours) ----------------
 
-// The factor between the evolved deviatoric stress S and the one that acts
-// in the momentum equation (porous solids: porosity.hpp's
-// porous_deviatoric_factor; 1 otherwise).
+// The factor between the evolved deviatoric stress S and that of the intact
+// material: porous solids scale it with alpha (porosity.hpp's
+// porous_deviatoric_factor); 1 otherwise. The plastic return works on it.
 template <int D>
-RUBBLE_HD_INLINE Real deviatoric_factor_particle(const RhsContext<D>& c, std::uint32_t a) {
+RUBBLE_HD_INLINE Real intact_deviatoric_factor_particle(const RhsContext<D>& c, std::uint32_t a) {
   const MaterialParams& mat = c.mat[c.s.material_id[a]];
   return mat.porosity.enabled ? porous_deviatoric_factor(mat.porosity, c.s.alpha[a]) : Real(1);
+}
+
+// The factor between the evolved deviatoric stress S and the one that acts
+// in the momentum equation: the intact factor, times 1 - D for a damaged
+// material whose damage acts on the deviator (physics/damage.hpp).
+template <int D>
+RUBBLE_HD_INLINE Real deviatoric_factor_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const Real f = intact_deviatoric_factor_particle<D>(c, a);
+  if (!c.s.damage_root) return f;
+  const DamageParams& dp = c.mat[c.s.material_id[a]].damage;
+  return dp.enabled ? f * damaged_deviatoric_factor(dp, damage_from_root<D>(c.s.damage_root[a])) : f;
 }
 
 // d alpha/dt of particle a from the chain rule, given its d rho/dt and
@@ -245,7 +267,7 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
   if (mat.plasticity.model == PlasticityModel::None || !state_evolves<D>(s, a)) return;
-  const Real f = deviatoric_factor_particle<D>(c, a);
+  const Real f = intact_deviatoric_factor_particle<D>(c, a);
   const Real K = s.rho[a] * s.cs[a] * s.cs[a];
   const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], s.p[a], f * mat.shear_modulus, K);
   s.S[a] = (Real(1) / f) * r.S;
@@ -272,6 +294,58 @@ RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::ui
   const MaterialParams& mat = c.mat[s.material_id[a]];
   if (!mat.porosity.enabled || !state_evolves<D>(s, a)) return;
   s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], alpha_start[a]);
+}
+
+// ---- tensile damage (per particle, no neighbours; physics/damage.hpp) ----
+
+// What the growth law needs of particle a: the local tensile strain of its
+// intact stress, the flaws active at it and the crack speed over the
+// particle radius.
+struct DamageDrive {
+  Real n_act;   // flaws active at the current strain
+  Real c_g;     // crack growth speed [m/s]
+  Real radius;  // R_s [m]
+};
+
+template <int D>
+RUBBLE_HD_INLINE DamageDrive damage_drive_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  const EosState e = intact_eos_particle<D>(c, a);
+  const Real f = intact_deviatoric_factor_particle<D>(c, a);
+  const Real mu = f * mat.shear_modulus;
+  const Real c2 = e.c2 > Real(0) ? e.c2 : Real(0);
+  const Real E = youngs_modulus(s.rho[a] * c2, mu);
+  const Real eps = local_tensile_strain<D>(f * s.S[a], e.p, E);
+  const Real n_act = active_flaws(eps, s.flaw_count[a], s.flaw_eps_min[a], s.flaw_eps_max[a], mat.damage.weibull_m);
+  const Real cl = elastic_signal_speed(std::sqrt(c2), mu, s.rho[a]);
+  return DamageDrive{n_act, mat.damage.crack_speed * cl, particle_radius<D>(s.m[a] / s.rho[a])};
+}
+
+// d delta/dt of particle a (0 for materials without damage, walls, and
+// particles out of tension or at their cap).
+template <int D>
+RUBBLE_HD_INLINE Real damage_rate_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (!c.mat[s.material_id[a]].damage.enabled || !state_evolves<D>(s, a) || s.flaw_count[a] <= 0) return 0;
+  const DamageDrive d = damage_drive_particle<D>(c, a);
+  return damage_root_rate<D>(s.damage_root[a], d.n_act, s.flaws_active[a], s.flaw_count[a], d.c_g, d.radius);
+}
+
+// End of an accepted step: the flaws active at the final state join the
+// particle's record (n_active never falls), and delta is held to its cap
+// (n_active/n_flaws)^(1/d) — the growth of the step's last stage may have
+// passed it — but never below its value at the start of the step, which
+// the record's cap already admitted (delta never falls).
+template <int D>
+RUBBLE_HD_INLINE void damage_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (!c.mat[s.material_id[a]].damage.enabled || !state_evolves<D>(s, a) || s.flaw_count[a] <= 0) return;
+  const DamageDrive d = damage_drive_particle<D>(c, a);
+  const Real n_max = d.n_act > s.flaws_active[a] ? d.n_act : s.flaws_active[a];
+  s.flaws_active[a] = n_max;
+  const Real cap = damage_root_cap<D>(n_max, s.flaw_count[a]);
+  if (s.damage_root[a] > cap) s.damage_root[a] = cap;
 }
 
 // The uniform external acceleration (simulation.gravity) on free particles.
@@ -339,6 +413,7 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
   }
   const MaterialParams& mat = c.mat[s.material_id[a]];
   s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
+  if (s.ddamage_root_dt) s.ddamage_root_dt[a] = damage_rate_particle<D>(c, a);
   if (c.art_R) {
     Mat<D> sigma = deviatoric_factor_particle<D>(c, a) * s.S[a];
     for (int i = 0; i < D; ++i) sigma.m[i][i] -= s.p[a];
@@ -352,7 +427,7 @@ template <int D>
 RUBBLE_HD_INLINE SolidParticle<D> solid_particle(const RhsContext<D>& c, std::uint32_t i) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[i]];
-  const Mat<D> S = s.alpha ? deviatoric_factor_particle<D>(c, i) * s.S[i] : s.S[i];
+  const Mat<D> S = (s.alpha || s.damage_root) ? deviatoric_factor_particle<D>(c, i) * s.S[i] : s.S[i];
   return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], S,
                           c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent};
 }
@@ -395,6 +470,7 @@ RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32
   if (s.drhodt) s.drhodt[a] = 0;
   if (s.dSdt) s.dSdt[a] = Mat<D>::zero();
   if (s.dalphadt) s.dalphadt[a] = 0;
+  if (s.ddamage_root_dt) s.ddamage_root_dt[a] = 0;
 }
 
 // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp),
@@ -457,6 +533,10 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
   if (s.dalphadt) {
     const Real dt_a = porosity_dt_limit(s.alpha[a], s.dalphadt[a], kAlphaStepFraction);
     dt = dt_a < dt ? dt_a : dt;
+  }
+  if (s.ddamage_root_dt) {
+    const Real dt_d = damage_dt_limit(s.ddamage_root_dt[a], kDamageStepChange);
+    dt = dt_d < dt ? dt_d : dt;
   }
   return dt;
 }

@@ -17,6 +17,7 @@ struct RhsFeatures {
   bool kernel_correction = false;  // solids: corrected velocity gradient
   bool porosity = false;           // a material is porous: d alpha/dt with the rates, end-of-step envelope return
   bool plasticity = false;         // a solid material yields: return mapping in each evaluation and step
+  bool damage = false;             // a solid material has tensile damage: its growth rate, end-of-step cap
   bool body_force = false;         // simulation.gravity is not zero
   bool wall_extrapolation = false; // a boundary body has boundary_state = "extrapolated"
 };
@@ -30,6 +31,7 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     f.artificial_stress = f.artificial_stress || m.as_exponent > Real(0);
     f.porosity = f.porosity || m.porosity.enabled;
     f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
+    f.damage = f.damage || m.damage.enabled;
   }
   for (int k = 0; k < D; ++k) f.body_force = f.body_force || scene.simulation.gravity[k] != 0;
   for (const BodyConfig& b : scene.bodies)
@@ -39,6 +41,8 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     throw RunError("porous materials need the alpha and dalphadt fields allocated");
   if (f.plasticity && (!f.solid || ps.eps_p.size() != ps.n))
     throw RunError("plasticity needs a solid with the eps_p field allocated");
+  if (f.damage && (!f.solid || ps.damage_root.size() != ps.n || ps.flaw_count.size() != ps.n))
+    throw RunError("damage needs a solid with the damage and flaw fields allocated");
   if (f.solid) {
     if (scene.simulation.density == DensityForm::Summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
       throw RunError("solids need continuity density with the S and dSdt fields allocated");

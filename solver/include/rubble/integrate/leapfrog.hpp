@@ -11,7 +11,9 @@
 //   end of step: the system's end_step(alpha_n) (porous states back onto the
 //   loading envelope from alpha_n; plastic return, when a material yields)
 // The distention alpha of porous materials is evolved like u, and kept >= 1
-// (integrated_alpha); its rate is <= 0, so alpha never rises.
+// (integrated_alpha); its rate is <= 0, so alpha never rises. The damage
+// root delta = D^(1/d) of damaged solids likewise, kept <= 1 with a rate >= 0
+// (integrated_damage_root), and held to its cap at the end of the step.
 #include <cstddef>
 #include <vector>
 
@@ -19,6 +21,7 @@
 #include "rubble/core/hd.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/particles/store_view.hpp"
+#include "rubble/physics/damage.hpp"
 
 namespace rubble {
 
@@ -31,6 +34,7 @@ struct LeapfrogHalf {
   Real* rho = nullptr;
   Mat<D>* S = nullptr;
   Real* alpha = nullptr;
+  Real* damage_root = nullptr;
 };
 
 // alpha0 + w d alpha/dt, never below 1 (full compaction); w >= 0 and
@@ -49,6 +53,8 @@ RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>
   if (half_state.rho) s.rho[i] = half_state.rho[i] + half * s.drhodt[i];
   if (half_state.S) s.S[i] = half_state.S[i] + half * s.dSdt[i];
   if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
+  if (half_state.damage_root)
+    s.damage_root[i] = integrated_damage_root(half_state.damage_root[i], half, s.ddamage_root_dt[i]);
 }
 
 // First half of particle i's step: kick to the half step, drift the
@@ -63,6 +69,8 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   if (half_state.rho) half_state.rho[i] = s.rho[i] + half * s.drhodt[i];
   if (half_state.S) half_state.S[i] = s.S[i] + half * s.dSdt[i];
   if (half_state.alpha) half_state.alpha[i] = integrated_alpha(s.alpha[i], half, s.dalphadt[i]);
+  if (half_state.damage_root)
+    half_state.damage_root[i] = integrated_damage_root(s.damage_root[i], half, s.ddamage_root_dt[i]);
   // XSPH (when on) adds its correction, evaluated at the start of the step
   const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
   s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
@@ -77,8 +85,13 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
   std::vector<Mat<D>> S_half(ps.dSdt.empty() ? 0 : n);  // solids: the deviatoric stress
   std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
   const std::vector<Real> alpha_start = ps.alpha;               // and its value at the start (end_step)
-  const LeapfrogHalf<D> half{v_half.data(), u_half.data(), rho_half.empty() ? nullptr : rho_half.data(),
-                             S_half.empty() ? nullptr : S_half.data(), alpha_half.empty() ? nullptr : alpha_half.data()};
+  std::vector<Real> damage_half(ps.ddamage_root_dt.empty() ? 0 : n);  // damaged solids: delta = D^(1/d)
+  const LeapfrogHalf<D> half{v_half.data(),
+                             u_half.data(),
+                             rho_half.empty() ? nullptr : rho_half.data(),
+                             S_half.empty() ? nullptr : S_half.data(),
+                             alpha_half.empty() ? nullptr : alpha_half.data(),
+                             damage_half.empty() ? nullptr : damage_half.data()};
   const StoreView<D> s = ps.view();
   const Box<D> domain = sys.domain();
 #pragma omp parallel for if (n > 4096)

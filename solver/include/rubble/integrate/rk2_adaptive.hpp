@@ -14,6 +14,8 @@
 // solid with u = 0 is not held to an absolute error of zero) and rho for
 // density, and |S| + rho c_s^2 for the deviatoric stress of solids
 // (Frobenius norms), and alpha for the distention of porous materials.
+// The damage root delta = D^(1/d) is not in the error: its change per step
+// is limited instead (dt_limit_particle: kDamageStepChange), as for leapfrog.
 // After the accepted combination the system's end_step() runs (the plastic
 // return, when a material yields), then the evaluation for the next k1. A step with err > tol is
 // rejected and retried; the next step size is
@@ -51,6 +53,7 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
     if (y.drhodt) y.rho[i] = y0.rho[i] + w * ka.drhodt[i];
     if (y.dSdt) y.S[i] = y0.S[i] + w * ka.dSdt[i];
     if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i]);
+    if (y.ddamage_root_dt) y.damage_root[i] = integrated_damage_root(y0.damage_root[i], w, ka.ddamage_root_dt[i]);
     return;
   }
   y.x[i] = domain.wrap(y0.x[i] + w * (ka.position_rate(i) + kb->position_rate(i)));
@@ -59,6 +62,8 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
   if (y.drhodt) y.rho[i] = y0.rho[i] + w * (ka.drhodt[i] + kb->drhodt[i]);
   if (y.dSdt) y.S[i] = y0.S[i] + w * (ka.dSdt[i] + kb->dSdt[i]);
   if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i] + kb->dalphadt[i]);
+  if (y.ddamage_root_dt)
+    y.damage_root[i] = integrated_damage_root(y0.damage_root[i], w, ka.ddamage_root_dt[i] + kb->ddamage_root_dt[i]);
 }
 
 // The scaled error of particle i: y_heun - y_rk3 = c23 [ (k1 + k2)/2 - k3 ]

@@ -34,6 +34,7 @@ struct FieldNeeds {
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
   bool free_slip = false;           // a wall is free-slip: wall_normal is stored
   bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
+  bool damage = false;              // a solid material has tensile damage: the damage and flaw fields are stored
 };
 
 template <int D>
@@ -93,6 +94,18 @@ struct ParticleStore {
   // plus dilatant plastic flow (psi > 0); the EOS sees the elastic density
   // rho exp(eps_v) (physics.md, "Plasticity")
   std::vector<Real> eps_v;  // [1]
+
+  // tensile damage (allocated only when a solid material has a damage
+  // table; physics/damage.hpp): delta = D^(1/d), its rate, the particle's
+  // Weibull flaws (count, smallest and largest activation strain; 0 flaws
+  // for particles of other materials and walls) and the most flaws it has
+  // had active (the cap D <= n_active/n_flaws)
+  std::vector<Real> damage_root;          // [1] (evolved)
+  std::vector<Real> ddamage_root_dt;      // [1/s]
+  std::vector<std::int32_t> flaw_count;   // [1]
+  std::vector<Real> flaw_eps_min;         // [1]
+  std::vector<Real> flaw_eps_max;         // [1]
+  std::vector<Real> flaws_active;         // [1] (updated at the end of each step; never falls)
 
   // free-slip walls (allocated only when a boundary body is free-slip): the
   // wall's unit normal on its particles, zero on every other particle
@@ -162,6 +175,12 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"eps_p", &PS::eps_p, "1", FieldRole::Evolved, true},
       {"eps_v", &PS::eps_v, "1", FieldRole::Evolved, true},
       {"wall_normal", &PS::wall_normal, "1", FieldRole::Constant, false},
+      {"damage_root", &PS::damage_root, "1", FieldRole::Evolved, true},
+      {"ddamage_root_dt", &PS::ddamage_root_dt, "1/s", FieldRole::Rate, false},
+      {"flaw_count", &PS::flaw_count, "1", FieldRole::Constant, true},
+      {"flaw_eps_min", &PS::flaw_eps_min, "1", FieldRole::Constant, true},
+      {"flaw_eps_max", &PS::flaw_eps_max, "1", FieldRole::Constant, true},
+      {"flaws_active", &PS::flaws_active, "1", FieldRole::Evolved, true},
   };
   return table;
 }
@@ -205,6 +224,14 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   if (needs.plasticity) eps_p.assign(n, 0);
   if (needs.inelastic_volume) eps_v.assign(n, 0);
   if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
+  if (needs.damage) {
+    damage_root.assign(n, 0);
+    ddamage_root_dt.assign(n, 0);
+    flaw_count.assign(n, 0);
+    flaw_eps_min.assign(n, 0);
+    flaw_eps_max.assign(n, 0);
+    flaws_active.assign(n, 0);
+  }
 }
 
 template <int D>

@@ -55,6 +55,12 @@ struct StoreView {
   Real* eps_p = nullptr;
   Real* eps_v = nullptr;
   Vec<D>* wall_normal = nullptr;
+  Real* damage_root = nullptr;
+  Real* ddamage_root_dt = nullptr;
+  std::int32_t* flaw_count = nullptr;
+  Real* flaw_eps_min = nullptr;
+  Real* flaw_eps_max = nullptr;
+  Real* flaws_active = nullptr;
 
   // Point the field called `name` (the field table's names) at `ptr`;
   // false if the name is unknown or the element type does not match.
@@ -76,6 +82,8 @@ struct StoreView {
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
     set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p"), set(eps_v, "eps_v");
     set(wall_normal, "wall_normal");
+    set(damage_root, "damage_root"), set(ddamage_root_dt, "ddamage_root_dt"), set(flaw_count, "flaw_count");
+    set(flaw_eps_min, "flaw_eps_min"), set(flaw_eps_max, "flaw_eps_max"), set(flaws_active, "flaws_active");
     return ok;
   }
 

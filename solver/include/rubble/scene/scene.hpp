@@ -126,6 +126,17 @@ struct PlasticityConfig {
   ConeFit cone = ConeFit::PlaneStrain;
 };
 
+// Tensile damage of a solid (Grady & Kipp 1980; Benz & Asphaug 1994, 1995;
+// physics/damage.hpp): damage = { model = "grady_kipp", weibull_k, weibull_m, ... }.
+struct DamageConfig {
+  bool enabled = false;
+  double weibull_k = 0;     // [m^-3] n(eps) = k eps^m flaws per unit volume (> 0)
+  double weibull_m = 0;     // [1] (> 0)
+  double crack_speed = 0.4; // crack growth speed / longitudinal sound speed, in (0, 1]
+  bool deviatoric = true;   // damage reduces the deviatoric stress too (not only tension)
+  std::int64_t seed = 1;    // of the flaw draw (>= 0); each body mixes in its index
+};
+
 struct MaterialConfig {
   std::string name;     // the key under [materials]
   std::string library;       // library material name or file as written ("" = inline)
@@ -143,6 +154,7 @@ struct MaterialConfig {
   ArtificialStressConfig artificial_stress;
   PorosityConfig porosity;      // off unless the material has a porosity table
   PlasticityConfig plasticity;  // none unless the material has a plasticity table
+  DamageConfig damage;          // off unless the material has a damage table
 };
 
 // Box: min..max. Sphere (a disk in 2-D, a segment in 1-D): center, radius.
