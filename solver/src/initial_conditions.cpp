@@ -248,7 +248,11 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
           : InputError(scene.file, key + ".internal_energy", "is " + fmt_g(u) + ", must be finite and >= 0");
     for (const Vec<D>& x : body_points[i]) {
       ps.x[next] = x;
-      for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
+      for (int k = 0; k < D; ++k) {
+        double v = b.velocity[k];
+        for (int l = 0; l < D; ++l) v += b.velocity_gradient[k][l] * double(x[l]);
+        ps.v[next][k] = Real(v);
+      }
       ps.m[next] = Real(m);
       ps.material_id[next] = b.material_id;
       ps.id[next] = static_cast<std::int32_t>(next);

@@ -929,7 +929,8 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
-                                    "velocity", "boundary", "boundary_state", "wall_slip", "wall_normal"};
+                                    "velocity", "velocity_gradient", "boundary", "boundary_state", "wall_slip",
+                                    "wall_normal"};
   if (round) known.insert(known.end(), {"center", "radius"});
   else known.insert(known.end(), {"min", "max"});
   if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
@@ -1014,8 +1015,27 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   }
 
   if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  if (const toml::node* n = t.get("velocity_gradient")) {
+    const std::string key = sub(p, "velocity_gradient");
+    const toml::array* rows = n->as_array();
+    if (!rows) fail(key, "expected an array of " + std::to_string(dim_) + " rows of " + std::to_string(dim_) +
+                             " numbers [1/s], got " + type_name(*n), n);
+    check_length(*rows, key, n);
+    for (int r = 0; r < dim_; ++r) {
+      const toml::node& row = (*rows)[std::size_t(r)];
+      const toml::array* cols = row.as_array();
+      if (!cols) fail(key, "row " + std::to_string(r) + ": expected an array of " + std::to_string(dim_) + " numbers", &row);
+      check_length(*cols, key, &row);
+      for (int c = 0; c < dim_; ++c)
+        b.velocity_gradient[r][c] = as_number((*cols)[std::size_t(c)], key, "row " + std::to_string(r) + " entry " +
+                                                                             std::to_string(c) + " ");
+    }
+  }
   b.boundary = choice(t, "boundary", p, BoundaryKind::None,
                       {{"none", BoundaryKind::None}, {"fixed", BoundaryKind::Fixed}, {"moving", BoundaryKind::Moving}});
+  if (b.boundary != BoundaryKind::None && t.contains("velocity_gradient"))
+    fail(p + ".velocity_gradient", "a boundary body moves rigidly with its velocity; only free bodies take a velocity_gradient",
+         t.get("velocity_gradient"));
   if (b.boundary == BoundaryKind::Fixed)
     for (int a = 0; a < dim_; ++a)
       if (b.velocity[a] != 0)

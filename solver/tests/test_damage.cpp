@@ -485,3 +485,27 @@ TEST(DamageLibrary, BrittleBasaltAndIceCarryTheirWeibullConstants) {
     EXPECT_EQ(m.tillotson.alpha, base.tillotson.alpha) << w.name;
   }
 }
+
+TEST(VelocityGradient, LinearInitialVelocityAndErrors) {
+  // a 1-D bar stretched about x = 0: v = 2 + 1e3 x
+  const std::string base =
+      "[simulation]\ndimension = 1\nend_time = 1e-9\n[materials.r]\neos = \"murnaghan\"\n"
+      "murnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n[[bodies]]\nshape = \"box\"\nmaterial = \"r\"\nmin = [-0.5]\n"
+      "max = [0.5]\nspacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = [2.0]\n";
+  const Scene s = parse_scene(base + "velocity_gradient = [[1e3]]\n", "t.toml");
+  EXPECT_EQ(s.bodies[0].velocity_gradient[0][0], 1e3);
+  TempDir d("vgrad");
+  RunOptions opt;
+  opt.out_dir = d.path.string();
+  opt.quiet = true;
+  run_scene(s, opt);
+  ParticleStore<1> ps;
+  SnapshotMeta meta;
+  read_snapshot<1>((d.path / snapshot_filename(s.output.name, 0)).string(), ps, meta);
+  for (std::size_t i = 0; i < ps.n; ++i) EXPECT_NEAR(ps.v[i][0], 2 + 1e3 * ps.x[i][0], 1e-12);
+  EXPECT_NE(parse_error(base + "velocity_gradient = [1e3]\n").find("bodies[0].velocity_gradient"), std::string::npos);
+  EXPECT_NE(parse_error(base + "velocity_gradient = [[1e3, 0.0]]\n").find("bodies[0].velocity_gradient"),
+            std::string::npos);
+  EXPECT_NE(parse_error(base + "velocity_gradient = [[1e3]]\nboundary = \"moving\"\n").find("bodies[0].velocity_gradient"),
+            std::string::npos);
+}

@@ -182,6 +182,9 @@ struct BodyConfig {
   double pressure = -1;      // [Pa]  one of pressure / internal_energy
   double internal_energy = -1;  // [J/kg]
   std::array<double, 3> velocity{};  // [m/s]
+  // velocity_gradient: the initial velocity is velocity + L x (x the
+  // particle's position); rows of L, first D used. Free bodies only.
+  std::array<std::array<double, 3>, 3> velocity_gradient{};  // [1/s]
   BoundaryKind boundary = BoundaryKind::None;
   // boundary_state: "frozen" (default): the boundary particles keep their
   // initial state. "evolving": their density, internal energy and stress

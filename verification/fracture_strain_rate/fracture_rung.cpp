@@ -1,0 +1,243 @@
+// Rung: the strain-rate law and the size effect of Grady-Kipp tensile damage
+// with Weibull flaws (issue #18 item 4; physics/damage.hpp; docs/physics.md,
+// "Fracture").
+//
+// Setup (1-D uniaxial strain, SI units): a bar of linear-elastic basalt
+// (Murnaghan n = 1 with K = 26.7 GPa, rho0 = 2700; mu = 22.7 GPa; Weibull
+// k = 4e35 m^-3, m = 9: the constants of the library's basalt_brittle) of
+// length L about x = 0, stretched homogeneously: every particle starts with
+// v = eps_dot x (scene key velocity_gradient) and the three particle rows at
+// each end move with the end's velocity for ever (moving boundaries), so
+// the strain grows as eps_dot t everywhere until the bar breaks. The failure
+// stress sigma_f is the peak over time of the bar's mean acting axial stress
+// sigma_xx = (1 - D) S_xx - p (p the acting pressure of the snapshots).
+//
+// Theory (derived here in d dimensions after Grady & Kipp 1980, who give
+// d = 3): flaws n(eps) = k eps^m per volume activate as eps = eps_dot t, each
+// grows a crack whose damaged measure is ~ (c_g (t - t_act))^d, so
+//   D(t) ~ k c_g^d eps_dot^m t^(m+d),
+// the stress E eps_dot t (1 - D) peaks when D reaches a fixed fraction, at
+// t* ~ eps_dot^(-m/(m+d)), and sigma_f ~ eps_dot t* ~ eps_dot^(d/(m+d)):
+// 3/(m+3) in 3-D, 1/(m+1) in 1-D. rubble's per-particle law
+// d(D^(1/d))/dt = n_act c_g/R_s with n_act ~ k V_p eps^m gives the same
+// exponent in 1-D (D ~ eps_dot^m t^(m+1)). At low rates the bar breaks as
+// soon as its weakest flaw, eps_1 = (1/(kV))^(1/m) of flaw j = 1, activates:
+// sigma_f -> E eps_1 ~ V^(-1/m), the Weibull size effect (V = L x 1 m^2).
+//
+// Checks: the slope of ln sigma_f against ln eps_dot over the --dynamic rates
+// within 10 % of 1/(m+1) (issue #18 item 4); the slope of ln sigma_f against
+// ln V over the --lengths at the quasi-static rate within 15 % of -1/m.
+//
+//   fracture_rung --records DIR [--rates 1e1,...] [--dynamic 1e3,...]
+//                 [--lengths 0.05,...] [--dx 5e-4] [--known-failure TEXT]...
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../common/args.hpp"
+#include "../common/record.hpp"
+#include "rubble/io/snapshot.hpp"
+#include "rubble/run.hpp"
+#include "rubble/scene/scene.hpp"
+
+namespace fs = std::filesystem;
+using rubble::verification::Check;
+using rubble::verification::Json;
+
+namespace {
+
+constexpr double kK = 2.67e10, kMu = 2.27e10, kRho0 = 2700, kWeibullK = 4e35, kWeibullM = 9;
+const double kE = 9 * kK * kMu / (3 * kK + kMu);
+const double kCl = std::sqrt((kK + 4.0 / 3.0 * kMu) / kRho0);
+
+struct Args {
+  std::string records = "reports/records", out = "fracture_out", label = "bar_1d";
+  std::vector<double> rates = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5};
+  std::vector<double> dynamic = {1e2, 1e3, 1e4, 1e5};
+  std::vector<double> lengths = {0.05, 0.1, 0.2, 0.4};
+  double dx = 1e-3, length = 0.1, quasi_static = 0.05;
+  std::vector<std::string> known_failures;
+};
+
+Args parse(int argc, char** argv) {
+  Args a;
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--records", a.records) || r.value("--out", a.out) || r.value("--label", a.label) ||
+          r.list("--rates", a.rates) || r.list("--dynamic", a.dynamic) || r.list("--lengths", a.lengths) ||
+          r.value("--dx", a.dx) || r.value("--length", a.length) || r.value("--quasi-static", a.quasi_static) ||
+          r.append("--known-failure", a.known_failures)))
+      r.unknown();
+  return a;
+}
+
+// The scene of a bar of length L stretched at eps_dot. The run lasts 1.5
+// times the weakest flaw's time eps_1/eps_dot plus 3 growth times R_s/c_g of
+// one flaw, with 200 outputs; the step is held to 1/20 of the larger of
+// eps_1 and the strain of one growth time per step (courant).
+std::string bar_scene(double L, double eps_dot, double dx, double& end_time) {
+  const double eps1 = std::pow(1.0 / (kWeibullK * L), 1.0 / kWeibullM);
+  const double growth = 0.5 * dx / (0.4 * kCl);  // R_s / c_g of one particle with one flaw
+  end_time = 1.5 * eps1 / eps_dot + 3 * growth;
+  const double dt_courant = 0.3 * dx / kCl;  // Monaghan h = dx at hfact 2 in 1-D
+  const double eps_step = std::max(eps1, eps_dot * growth) / 20;
+  const double courant = std::min(0.3, 0.3 * (eps_step / eps_dot) / dt_courant);
+  const double half = 0.5 * L, wall = 3 * dx, v_end = eps_dot * (half + 0.5 * wall);
+  std::ostringstream s;
+  s.precision(17);
+  s << "[simulation]\ndimension = 1\nend_time = " << end_time << "\nintegrator = \"leapfrog\"\nhfact = 2.0\n"
+    << "density = \"continuity\"\ncourant = " << courant << "\n"
+    << "[materials.basalt]\neos = \"murnaghan\"\nmurnaghan = { rho0 = " << kRho0 << ", K0 = " << kK << ", n = 1.0 }\n"
+    << "shear_modulus = " << kMu << "\n"
+    << "damage = { model = \"grady_kipp\", weibull_k = " << kWeibullK << ", weibull_m = " << kWeibullM << " }\n"
+    << "[materials.grip]\neos = \"murnaghan\"\nmurnaghan = { rho0 = " << kRho0 << ", K0 = " << kK << ", n = 1.0 }\n"
+    << "shear_modulus = " << kMu << "\n"
+    << "[[bodies]]\nshape = \"box\"\nmaterial = \"basalt\"\nmin = [" << -half << "]\nmax = [" << half
+    << "]\nspacing = " << dx << "\ndensity = " << kRho0 << "\ninternal_energy = 0.0\nvelocity_gradient = [["
+    << eps_dot << "]]\n"
+    << "[[bodies]]\nshape = \"box\"\nmaterial = \"grip\"\nmin = [" << -half - wall << "]\nmax = [" << -half
+    << "]\nspacing = " << dx << "\ndensity = " << kRho0 << "\ninternal_energy = 0.0\nboundary = \"moving\"\n"
+    << "boundary_state = \"evolving\"\nvelocity = [" << -v_end << "]\n"
+    << "[[bodies]]\nshape = \"box\"\nmaterial = \"grip\"\nmin = [" << half << "]\nmax = [" << half + wall
+    << "]\nspacing = " << dx << "\ndensity = " << kRho0 << "\ninternal_energy = 0.0\nboundary = \"moving\"\n"
+    << "boundary_state = \"evolving\"\nvelocity = [" << v_end << "]\n"
+    << "[output]\nname = \"bar\"\ninterval = " << end_time / 200 << "\n";
+  return s.str();
+}
+
+struct BarResult {
+  double sigma_f = 0, t_f = 0, wall = 0;
+  long long steps = 0;
+  std::size_t n = 0;
+  std::vector<double> t, sigma;  // mean acting sigma_xx over the free particles
+  double broken_fraction = 0;   // particles with D > 0.5 at the end
+};
+
+BarResult run_bar(double L, double eps_dot, double dx, const fs::path& dir) {
+  double end_time = 0;
+  const rubble::Scene scene = rubble::parse_scene(bar_scene(L, eps_dot, dx, end_time), "fracture_bar.toml");
+  fs::remove_all(dir);
+  rubble::RunOptions opt;
+  opt.out_dir = dir.string();
+  opt.quiet = true;
+  const rubble::FinalState fin = rubble::run_scene(scene, opt);
+  BarResult r;
+  r.wall = fin.wall_seconds;
+  r.steps = fin.steps;
+  for (int k = 0;; ++k) {
+    const fs::path f = dir / rubble::snapshot_filename(scene.output.name, k);
+    if (!fs::exists(f)) break;
+    rubble::ParticleStore<1> ps;
+    rubble::SnapshotMeta meta;
+    rubble::read_snapshot<1>(f.string(), ps, meta);
+    double sum = 0, broken = 0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < ps.n; ++i) {
+      if (ps.material_id[i] != 0) continue;  // the grips
+      const double D = ps.damage_root[i];    // 1-D: delta = D
+      sum += (1 - D) * ps.S[i].m[0][0] - ps.p[i];
+      broken += D > 0.5;
+      ++count;
+    }
+    r.n = count;
+    r.t.push_back(meta.time);
+    r.sigma.push_back(sum / double(count));
+    r.broken_fraction = broken / double(count);
+  }
+  const auto peak = std::max_element(r.sigma.begin(), r.sigma.end()) - r.sigma.begin();
+  r.sigma_f = r.sigma[std::size_t(peak)];
+  r.t_f = r.t[std::size_t(peak)];
+  fs::remove_all(dir);
+  return r;
+}
+
+// Least-squares slope of ln y against ln x.
+double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const double n = double(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double a = std::log(x[i]), b = std::log(y[i]);
+    sx += a, sy += b, sxx += a * a, sxy += a * b;
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Args a = parse(argc, argv);
+  std::vector<Check> checks;
+  // (1) the strain-rate law at the bar of length `length`
+  std::vector<double> sig, tf, walls;
+  std::vector<Json> series;
+  for (const double rate : a.rates) {
+    const BarResult r = run_bar(a.length, rate, a.dx, fs::path(a.out) / "rate");
+    sig.push_back(r.sigma_f), tf.push_back(r.t_f), walls.push_back(r.wall);
+    std::printf("rate %9.3g /s  L %.3g m  N %5zu  sigma_f %.4g MPa (eps %.4g)  t_f %.4g s  broken %.3f  steps %6lld  "
+                "wall %.2f s\n",
+                rate, a.length, r.n, r.sigma_f / 1e6, r.sigma_f / kE, r.t_f, r.broken_fraction, r.steps, r.wall);
+    std::fflush(stdout);
+    series.push_back(Json::object({{"rate", rate}, {"t", r.t}, {"sigma", r.sigma}}));
+  }
+  std::vector<double> dyn_rate, dyn_sig;
+  for (std::size_t i = 0; i < a.rates.size(); ++i)
+    if (std::find(a.dynamic.begin(), a.dynamic.end(), a.rates[i]) != a.dynamic.end())
+      dyn_rate.push_back(a.rates[i]), dyn_sig.push_back(sig[i]);
+  const double theory_rate = 1.0 / (kWeibullM + 1);
+  const double slope_rate = dyn_rate.size() >= 2 ? log_slope(dyn_rate, dyn_sig) : NAN;
+  checks.push_back({"|slope(ln sigma_f, ln eps_dot) - 1/(m+1)| / (1/(m+1)) over the dynamic rates",
+                    std::fabs(slope_rate - theory_rate) / theory_rate, 0.10, "<=",
+                    "issue #18 item 4: fitted slope within 10 % of the Grady-Kipp exponent d/(m+d), d = 1 "
+                    "(derived in fracture_rung.cpp after Grady & Kipp 1980)"});
+  // (2) the size effect at the quasi-static rate
+  std::vector<double> vol, sig_v;
+  for (const double L : a.lengths) {
+    const BarResult r = run_bar(L, a.quasi_static, a.dx, fs::path(a.out) / "size");
+    vol.push_back(L * 1.0), sig_v.push_back(r.sigma_f);
+    const double eps1 = std::pow(1.0 / (kWeibullK * L), 1.0 / kWeibullM);
+    std::printf("size  L %.3g m  N %5zu  sigma_f %.4g MPa  (E eps_1 %.4g MPa)  wall %.2f s\n", L, r.n, r.sigma_f / 1e6,
+                kE * eps1 / 1e6, r.wall);
+    std::fflush(stdout);
+  }
+  const double slope_size = log_slope(vol, sig_v), theory_size = -1.0 / kWeibullM;
+  checks.push_back({"|slope(ln sigma_f, ln V) - (-1/m)| / (1/m) at the quasi-static rate",
+                    std::fabs(slope_size - theory_size) / std::fabs(theory_size), 0.15, "<=",
+                    "issue #18 item 4: Weibull size effect sigma ~ V^(-1/m) within 15 %"});
+  bool passed = true;
+  const Json check_json = rubble::verification::judge_checks(checks, passed);
+  std::printf("slopes: rate %.4f (theory %.4f), size %.4f (theory %.4f)\n", slope_rate, theory_rate, slope_size,
+              theory_size);
+  const Json record = Json::object({
+      {"rung", "fracture_strain_rate"},
+      {"case", a.label},
+      {"parameters", Json::object({{"K", kK}, {"mu", kMu}, {"rho0", kRho0}, {"weibull_k", kWeibullK},
+                                   {"weibull_m", kWeibullM}, {"dx", a.dx}, {"length", a.length},
+                                   {"quasi_static_rate", a.quasi_static}})},
+      {"resolution", a.length / a.dx},
+      {"resolution_name", "L/dx"},
+      {"n_particles", a.length / a.dx},
+      {"dimension", 1},
+      {"errors", Json::object({{"rate_slope", Json::object({{"L1", std::fabs(slope_rate - theory_rate) / theory_rate}})},
+                               {"size_slope",
+                                Json::object({{"L1", std::fabs(slope_size - theory_size) / std::fabs(theory_size)}})}})},
+      {"measures", Json::object({{"rates", a.rates}, {"sigma_f", sig}, {"t_f", tf}, {"wall", walls},
+                                 {"dynamic_rates", dyn_rate}, {"slope_rate", slope_rate}, {"theory_rate", theory_rate},
+                                 {"volumes", vol}, {"sigma_f_size", sig_v}, {"slope_size", slope_size},
+                                 {"theory_size", theory_size}, {"histories", Json::array(series)}})},
+      {"wall_seconds", std::accumulate(walls.begin(), walls.end(), 0.0)},
+      {"backend", "cpu"},
+      {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
+      {"commit", RUBBLE_COMMIT},
+      {"checks", check_json},
+  });
+  rubble::verification::write_record(a.records, a.label, record);
+  return rubble::verification::rung_exit_status(checks, a.known_failures);
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "fracture_rung: error: %s\n", e.what());
+  return 2;
+}
