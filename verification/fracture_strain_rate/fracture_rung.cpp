@@ -156,15 +156,10 @@ BarResult run_bar(double L, double eps_dot, double dx, const fs::path& dir) {
   return r;
 }
 
-// Least-squares slope of ln y against ln x.
+// Least-squares slope of ln y against ln x: record.hpp's observed_order,
+// which is that slope negated.
 double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = double(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double a = std::log(x[i]), b = std::log(y[i]);
-    sx += a, sy += b, sxx += a * a, sxy += a * b;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return -rubble::verification::observed_order(x, y);
 }
 
 }  // namespace
