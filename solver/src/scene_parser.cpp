@@ -1033,8 +1033,9 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   }
   b.boundary = choice(t, "boundary", p, BoundaryKind::None,
                       {{"none", BoundaryKind::None}, {"fixed", BoundaryKind::Fixed}, {"moving", BoundaryKind::Moving}});
-  if (b.boundary != BoundaryKind::None && t.contains("velocity_gradient"))
-    fail(p + ".velocity_gradient", "a boundary body moves rigidly with its velocity; only free bodies take a velocity_gradient",
+  if (b.boundary == BoundaryKind::Fixed && t.contains("velocity_gradient"))
+    fail(p + ".velocity_gradient",
+         "a boundary = \"fixed\" body is at rest; use boundary = \"moving\" for particles that keep velocity + L x",
          t.get("velocity_gradient"));
   if (b.boundary == BoundaryKind::Fixed)
     for (int a = 0; a < dim_; ++a)

@@ -506,6 +506,41 @@ TEST(VelocityGradient, LinearInitialVelocityAndErrors) {
   EXPECT_NE(parse_error(base + "velocity_gradient = [1e3]\n").find("bodies[0].velocity_gradient"), std::string::npos);
   EXPECT_NE(parse_error(base + "velocity_gradient = [[1e3, 0.0]]\n").find("bodies[0].velocity_gradient"),
             std::string::npos);
-  EXPECT_NE(parse_error(base + "velocity_gradient = [[1e3]]\nboundary = \"moving\"\n").find("bodies[0].velocity_gradient"),
+  EXPECT_NE(parse_error(base + "velocity_gradient = [[1e3]]\nboundary = \"fixed\"\n").find("bodies[0].velocity_gradient"),
             std::string::npos);
+}
+
+TEST(VelocityGradient, MovingBoundaryParticlesKeepTheirOwnVelocity) {
+  // a stretching grip: a moving boundary body with v = 1e3 x next to a free
+  // body; every grip particle keeps its own initial velocity and moves with it
+  const std::string scene =
+      "[simulation]\ndimension = 1\nend_time = 1e-5\n[materials.r]\neos = \"murnaghan\"\n"
+      "murnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n"
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"r\"\nmin = [-0.5]\nmax = [0.5]\nspacing = 0.1\ndensity = 1.0\n"
+      "internal_energy = 0.0\nvelocity_gradient = [[1e3]]\n"
+      "[[bodies]]\nshape = \"box\"\nmaterial = \"r\"\nmin = [0.5]\nmax = [0.8]\nspacing = 0.1\ndensity = 1.0\n"
+      "internal_energy = 0.0\nboundary = \"moving\"\nvelocity_gradient = [[1e3]]\n"
+      "[output]\nname = \"g\"\ninterval = 1e-5\n";
+  const Scene s = parse_scene(scene, "t.toml");
+  TempDir d("vgrad_moving");
+  RunOptions opt;
+  opt.out_dir = d.path.string();
+  opt.quiet = true;
+  run_scene(s, opt);
+  ParticleStore<1> p0, p1;
+  SnapshotMeta m0, m1;
+  read_snapshot<1>((d.path / snapshot_filename(s.output.name, 0)).string(), p0, m0);
+  read_snapshot<1>((d.path / snapshot_filename(s.output.name, 1)).string(), p1, m1);
+  ASSERT_EQ(p0.n, p1.n);
+  std::size_t grip = 0;
+  for (std::size_t i = 0; i < p1.n; ++i) {
+    if (!p1.boundary[i]) continue;
+    ++grip;
+    const std::size_t j = std::size_t(std::find(p0.id.begin(), p0.id.begin() + long(p0.n), p1.id[i]) - p0.id.begin());
+    ASSERT_LT(j, p0.n);
+    EXPECT_NEAR(p0.v[j][0], 1e3 * p0.x[j][0], 1e-12);
+    EXPECT_EQ(p1.v[i][0], p0.v[j][0]);
+    EXPECT_NEAR(p1.x[i][0], p0.x[j][0] + p0.v[j][0] * (m1.time - m0.time), 1e-12);
+  }
+  EXPECT_EQ(grip, 3u);
 }
