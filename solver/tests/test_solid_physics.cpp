@@ -310,3 +310,28 @@ TEST(SolidPair, ReducesToHydroWithoutStress) {
   EXPECT_NEAR(s.drhodt, h.drhodt, 100 * std::numeric_limits<Real>::epsilon());
   EXPECT_NEAR(s.mu, h.mu, 100 * std::numeric_limits<Real>::epsilon());
 }
+
+// A fluid with artificial conductivity in a scene that also holds a solid
+// goes through the solid pair (issue #17 item 6): its conductivity term must
+// be hydro_pair's, and it must act (not be dropped).
+TEST(SolidPair, KeepsTheArtificialConductivity) {
+  SolidParticle<2> a{}, b{};
+  a.x = Vec<2>{{0.0, 0.0}};
+  b.x = Vec<2>{{0.3, 0.1}};
+  a.v = Vec<2>{{0.2, -0.1}};
+  b.v = Vec<2>{{-0.3, 0.05}};
+  a.m = 1; b.m = 1.2; a.rho = 1; b.rho = 1.1; a.p = 0.3; b.p = 0.1; a.h = 0.5; b.h = 0.55; a.cs = 1; b.cs = 1.1;
+  a.S = b.S = a.R = b.R = Mat<2>::zero();
+  a.av = b.av = {1.0, 2.0};
+  a.u = 2.0; b.u = 0.5;
+  const auto without = solid_pair<2>(KernelType::CubicSpline, a, b, a.x - b.x);
+  a.alpha_u = 1.0; b.alpha_u = 0.6;
+  const HydroParticle<2> ha{a.x, a.v, a.m, a.rho, a.p, a.u, a.h, 1.0, a.cs, a.av, a.alpha_u};
+  const HydroParticle<2> hb{b.x, b.v, b.m, b.rho, b.p, b.u, b.h, 1.0, b.cs, b.av, b.alpha_u};
+  const auto s = solid_pair<2>(KernelType::CubicSpline, a, b, a.x - b.x);
+  const auto h = hydro_pair<2>(KernelType::CubicSpline, ha, hb, a.x - b.x, true);
+  EXPECT_NEAR(s.dudt, h.dudt, 100 * std::numeric_limits<Real>::epsilon());
+  // hot a, cold b: conduction takes energy from a
+  EXPECT_LT(s.dudt, without.dudt);
+  EXPECT_GT(without.dudt - s.dudt, 1e-3 * std::fabs(without.dudt));
+}

@@ -200,3 +200,45 @@ TEST(SolidRun, KernelCorrectionRunsAndCountsFallbacks) {
   EXPECT_GT(evaluations, 1);
   EXPECT_EQ(with_lone.correction_fallbacks, evaluations);  // the lone particle, every time
 }
+
+// A fluid with artificial conductivity next to a solid (issue #17 item 6):
+// the scene runs the solid pair loop for every particle, and the fluid keeps
+// its conductivity there: the gas's internal energy after a few steps
+// differs from the same run with conductivity off (it was silently dropped).
+TEST(SolidRun, FluidKeepsItsConductivityNextToASolid) {
+  auto scene = [](bool conductivity) {
+    return std::string("[simulation]\ndimension = 2\nend_time = 0.02\nintegrator = \"leapfrog\"\n"
+                       "[materials.gas]\neos = \"ideal_gas\"\ngamma = 1.4\nconductivity = { enabled = ") +
+           (conductivity ? "true" : "false") +
+           " }\n[materials.rubber]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n"
+           "shear_modulus = 0.22\n"
+           "[[bodies]]\nshape = \"box\"\nmaterial = \"gas\"\nmin = [0.0, 0.0]\nmax = [0.5, 1.0]\nspacing = 0.1\n"
+           "density = 1.0\ninternal_energy = 2.0\n"
+           "[[bodies]]\nshape = \"box\"\nmaterial = \"gas\"\nmin = [0.5, 0.0]\nmax = [1.0, 1.0]\nspacing = 0.1\n"
+           "density = 1.0\ninternal_energy = 1.0\n"
+           "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [2.0, 0.0]\nmax = [2.5, 0.5]\nspacing = 0.1\n"
+           "density = 1.0\ninternal_energy = 0.0\n"
+           "[output]\nname = \"mix\"\ninterval = 0.02\n";
+  };
+  auto gas_energy = [](const Scene& s, const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
+    std::filesystem::remove_all(dir);
+    RunOptions opt;
+    opt.out_dir = dir.string();
+    opt.quiet = true;
+    run_scene(s, opt);
+    ParticleStore<2> ps;
+    SnapshotMeta meta;
+    read_snapshot<2>((dir / snapshot_filename(s.output.name, 1)).string(), ps, meta);
+    std::filesystem::remove_all(dir);
+    std::vector<double> u(ps.n);
+    for (std::size_t i = 0; i < ps.n; ++i) u[std::size_t(ps.id[i])] = ps.material_id[i] == 0 ? ps.u[i] : 0.0;
+    return u;
+  };
+  const std::vector<double> on = gas_energy(parse_scene(scene(true), "t.toml"), "cond_on");
+  const std::vector<double> off = gas_energy(parse_scene(scene(false), "t.toml"), "cond_off");
+  ASSERT_EQ(on.size(), off.size());
+  double largest = 0;
+  for (std::size_t i = 0; i < on.size(); ++i) largest = std::max(largest, std::fabs(on[i] - off[i]));
+  EXPECT_GT(largest, 1e-6);
+}

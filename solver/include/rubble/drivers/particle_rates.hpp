@@ -429,7 +429,8 @@ RUBBLE_HD_INLINE SolidParticle<D> solid_particle(const RhsContext<D>& c, std::ui
   const MaterialParams& mat = c.mat[s.material_id[i]];
   const Mat<D> S = (s.alpha || s.damage_root) ? deviatoric_factor_particle<D>(c, i) * s.S[i] : s.S[i];
   return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], S,
-                          c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent};
+                          c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent,
+                          s.u[i], mat.alpha_u};
 }
 
 // Pass 2: the full-stress momentum, energy and continuity equations.

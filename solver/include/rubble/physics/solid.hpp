@@ -8,6 +8,8 @@
 //   du_a/dt   = - sum_b m_b (sigma_a/rho_a^2) : (v_ab (x) gbar)
 //               - 1/2 sum_b m_b [ (R_a + R_b) f_ab^n - Pi_ab I ] : (v_ab (x) gbar)
 //   drho_a/dt =   sum_b m_b v_ab . gbar
+// plus, for materials with artificial conductivity (a fluid in a scene that
+// also holds a solid), hydro_pair's conductivity term in du_a/dt.
 //
 // The pair force is antisymmetric in (a,b) (momentum to round-off), and
 // du/dt is exactly the work of the pair force, so kinetic + internal energy
@@ -20,6 +22,7 @@
 
 #include "rubble/core/hd.hpp"
 #include "rubble/core/mat.hpp"
+#include "rubble/physics/artificial_conductivity.hpp"
 #include "rubble/physics/artificial_stress.hpp"
 #include "rubble/physics/artificial_viscosity.hpp"
 #include "rubble/physics/kernels.hpp"
@@ -36,6 +39,8 @@ struct SolidParticle {
   ViscosityParams av;  // of the particle's material
   Real dp;            // initial particle spacing of its material (artificial stress)
   Real as_exponent;   // n of the artificial stress (0 = off)
+  Real u = 0;         // specific internal energy (artificial conductivity)
+  Real alpha_u = 0;   // conductivity coefficient of its material (0 = off)
 };
 
 template <int D>
@@ -91,6 +96,16 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
   out.dudt = -b.m * double_dot(work, Mat<D>::outer(dv, g));
   out.drhodt = b.m * dot(dv, g);
   out.mu = -mu;
+
+  // Artificial conductivity (Price 2008), as in hydro_pair: the fluid of a
+  // scene that also holds a solid keeps it (issue #17 item 6); pair-mean
+  // coefficient, so it acts at half strength across a fluid-solid contact.
+  const Real alpha_u = Real(0.5) * (a.alpha_u + b.alpha_u);
+  if (alpha_u > Real(0)) {
+    const Real F_ab = dot(g, dx) / r;  // g = xhat F_ab
+    const Real vsig_u = conductivity_signal_speed(a.p, b.p, rhobar);
+    out.dudt += b.m * conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
+  }
   return out;
 }
 
