@@ -28,6 +28,7 @@ EosParams eos_params_from_material(const MaterialConfig& m) {
   e.limits.p_min_enabled = m.eos_options.p_min_enabled;
   e.limits.p_min = Real(m.eos_options.p_min);
   e.limits.cs_min = Real(m.eos_options.cs_min);
+  e.limits.cs_floor = m.eos_options.cs_floor;
   return e;
 }
 

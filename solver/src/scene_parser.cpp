@@ -611,7 +611,8 @@ void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, Ti
   require(c.beta >= 0, *t, "beta", tp, c.beta, ">= 0");
 }
 
-// The add-on options (each off unless given): rho_limit, p_min, cs_min.
+// The add-on options: rho_limit, p_min, cs_min (each off unless given) and
+// the Tillotson cs_floor (on unless set to false).
 void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o) {
   if (eos == EosType::IdealGas && t.contains("rho_limit"))
     fail(sub(p, "rho_limit"), "the ideal gas has no tension cut-off (it needs a reference density: murnaghan or tillotson)",
@@ -634,6 +635,10 @@ void SceneReader::read_eos_options(const toml::table& t, const std::string& p, E
     require(*x >= 0, t, "cs_min", p, *x, ">= 0 (0 = off)");
     o.cs_min = *x;
   }
+  if (t.contains("cs_floor") && eos != EosType::Tillotson)
+    fail(sub(p, "cs_floor"), "only the Tillotson EOS has a sound-speed floor (c^2 >= A/rho0); use cs_min for a minimum",
+         t.get("cs_floor"));
+  if (auto b = boolean(t, "cs_floor", p)) o.cs_floor = *b;
 }
 
 // One material table, complete: the EOS and its parameters, the add-ons,
@@ -648,7 +653,8 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   // (rho_limit is known to every EOS so that the ideal gas can say why it
   // has no tension cut-off)
   std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
-                                    "p_min",  "cs_min",        "shear_modulus",    "artificial_stress",
+                                    "p_min",  "cs_min",        "cs_floor",         "shear_modulus",
+                                    "artificial_stress",
                                     "porosity", "plasticity", "damage"};
   if (m.eos == EosType::IdealGas) known.push_back("gamma");
   if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");

@@ -393,6 +393,25 @@ TEST(eos_options, SoundSpeedFloorCoversEveryNonPositiveState) {
   EXPECT_EQ(eos_c2_floor(EosParams{}), 0.0);
 }
 
+TEST(eos_options, SoundSpeedFloorCanBeSwitchedOff) {
+  // cs_floor = false: the raw c², non-positive ones included, reaches the
+  // caller unchanged and nothing is flagged.
+  const TillotsonParams& t = basalt();
+  EosParams e = tillotson_eos(t);
+  e.limits.cs_floor = false;
+  EXPECT_EQ(eos_c2_floor(e), 0.0);
+  int nonpositive = 0;
+  for (double eta : linspace(0.3, 5.0, 95))
+    for (double u : u_grid(t, 33)) {
+      const double rho = eta * t.rho0;
+      const EosState raw = eos_evaluate_raw(e, rho, u), s = eos_evaluate(e, rho, u);
+      EXPECT_EQ(s.c2, raw.c2);
+      EXPECT_EQ(s.limited, 0u);
+      nonpositive += raw.c2 <= 0;
+    }
+  EXPECT_GT(nonpositive, 0);
+}
+
 TEST(eos_options, TillotsonTensionCutOffRemovesExactlyTheColdShare) {
   // Below η = rho_limit the cold (compressed-formula) share of the pressure
   // is dropped: p = 0 in cold states, p = w_e p_e in partial vaporisation,
@@ -862,6 +881,15 @@ TEST_F(eos_scene, OptionsAreReadAndValidated) {
   expect_scene_error(scene_with("library = \"basalt\"\nrho_limit = -0.1"), "materials.rock.rho_limit", {"in [0, 1]"});
   expect_scene_error(scene_with("library = \"basalt\"\ncs_min = -3"), "materials.rock.cs_min", {">= 0"});
   expect_scene_error(scene_with("library = \"basalt\"\np_min = true"), "materials.rock.p_min", {"expected a number"});
+  // the Tillotson sound-speed floor: on by default, off by name (issue #17 item 5)
+  EXPECT_TRUE(o.cs_floor);
+  EXPECT_TRUE(e.limits.cs_floor);
+  const Scene off = parse_scene(scene_with("library = \"basalt\"\ncs_floor = false"), "t.toml");
+  EXPECT_FALSE(off.materials[0].eos_options.cs_floor);
+  EXPECT_FALSE(eos_params_from_material(off.materials[0]).limits.cs_floor);
+  expect_scene_error(scene_with("library = \"basalt\"\ncs_floor = 1"), "materials.rock.cs_floor", {"expected"});
+  expect_scene_error(scene_with("library = \"rubber\"\ncs_floor = false"), "materials.rock.cs_floor",
+                     {"only the Tillotson EOS"});
 }
 
 TEST_F(eos_scene, BodiesGivenAsPressure) {

@@ -87,6 +87,7 @@ struct EosOptionsConfig {
   bool p_min_enabled = false;  // minimum pressure on?
   double p_min = 0;            // [Pa]
   double cs_min = 0;           // [m/s] minimum sound speed; 0 = off
+  bool cs_floor = true;        // Tillotson only: c^2 >= A/rho0 (key cs_floor)
 };
 
 // Artificial stress against the tensile instability (Monaghan 2000; Gray,

@@ -12,13 +12,16 @@
 //      (compressed-formula) share, p = w_e p_e (0 in cold states, p_e
 //      unchanged in hot ones). c² is not changed.
 //   2. minimum pressure (p_min_enabled): p = max(p, p_min).
-//   3. Tillotson sound-speed floor, always on: c² = max(c², A/ρ0), the
+//   3. Tillotson sound-speed floor, on by default (material key cs_floor):
+//      c² = max(c², A/ρ0), the
 //      uncompressed bulk value (as Reinhardt & Stadel 2017's Tillotson
 //      library and SWIFT's planetary EOS, Kegerreis et al. 2019). It acts
 //      only for η < 1 (for η ≥ 1, c² ≥ A/ρ0 already) and covers the cold
 //      expanded states where c² ≤ 0.
 //   4. minimum sound speed (cs_min > 0): c² = max(c², cs_min²).
-// Options 1, 2 and 4 are off unless the material turns them on.
+// Options 1, 2 and 4 are off unless the material turns them on; 3 is on
+// unless it turns it off (then c² ≤ 0 of a cold expanded state reaches the
+// driver, which takes c_s = sqrt(max(c², 0))).
 #include "rubble/core/hd.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/physics/eos/ideal_gas.hpp"
@@ -35,6 +38,7 @@ struct EosLimits {
   Real p_min = 0;              // minimum pressure, used when p_min_enabled
   bool p_min_enabled = false;  // (p_min = 0 is a meaningful setting: no tension)
   Real cs_min = 0;             // minimum sound speed; 0 = off
+  bool cs_floor = true;        // Tillotson: the floor c^2 >= A/rho0 (on unless the material says cs_floor = false)
 };
 
 // Plain-old-data so it can be copied to a device as it is.
@@ -70,9 +74,10 @@ struct EosState {
   unsigned limited = 0;                 // EosLimitFlags that acted
 };
 
-// The always-on floor of c²: A/ρ0 for Tillotson, none (0) otherwise.
+// The floor of c²: A/ρ0 for Tillotson unless switched off, none (0)
+// otherwise.
 RUBBLE_HD_INLINE Real eos_c2_floor(const EosParams& e) {
-  return e.kind == EosKind::Tillotson ? e.tillotson.A / e.tillotson.rho0 : Real(0);
+  return e.kind == EosKind::Tillotson && e.limits.cs_floor ? e.tillotson.A / e.tillotson.rho0 : Real(0);
 }
 
 RUBBLE_HD_INLINE EosState eos_evaluate_raw(const EosParams& e, Real rho, Real u) {
@@ -121,12 +126,12 @@ RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
   }
   // 3. the Tillotson floor
   const Real floor = eos_c2_floor(e);
-  if (s.c2 < floor) {
+  if (floor > Real(0) && s.c2 < floor) {
     s.c2 = floor;
     s.limited |= kEosSoundSpeedFloor;
   }
   // 4. minimum sound speed
-  if (s.c2 < l.cs_min * l.cs_min) {
+  if (l.cs_min > Real(0) && s.c2 < l.cs_min * l.cs_min) {
     s.c2 = l.cs_min * l.cs_min;
     s.limited |= kEosMinSoundSpeed;
   }
