@@ -264,7 +264,7 @@ double initial_courant_dt(const rubble::Scene& scene) {
     Real c = std::sqrt(rubble::eos_evaluate(eos, rho, u).c2);
     if (mat.shear_modulus > 0) c = rubble::elastic_signal_speed(c, Real(mat.shear_modulus), rho);
     const double cell = std::pow(rubble::lattice_cell_volume<D>(b.lattice, b.spacing), 1.0 / D);
-    const Real hM = rubble::monaghan_h(Real(hfact * cell));
+    const Real hM = rubble::monaghan_h<D>(sim.kernel, Real(hfact * cell));
     dt = std::min(dt, double(rubble::courant_dt(Real(sim.courant), hM, c, Real(mat.viscosity.alpha),
                                                 Real(mat.viscosity.beta), Real(0))));
   }

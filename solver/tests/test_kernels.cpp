@@ -456,3 +456,31 @@ TEST(Kernels, DefaultHfactFollowsStandardDeviationRule) {
 }
 
 }  // namespace
+
+namespace {
+// Monaghan's h_M of every kernel is the cubic spline's at the same standard
+// deviation (kernels.hpp, monaghan_h_factor; issue #17 item 5): the stored
+// factors against the exact quadrature of the second moment, in 1-3 D.
+template <int D>
+double sigma_over_H(KernelType k) {
+  const double surface = D == 1 ? 2.0 : D == 2 ? 2 * kPi : 4 * kPi;
+  const double m2 = radial_integral(
+      [&](double r) { return surface * std::pow(r, D + 1) * double(rubble::kernel_w<D>(k, Real(r), Real(1))); }, 1.0);
+  return std::sqrt(m2 / D);
+}
+
+template <int D>
+void check_monaghan_h_factor() {
+  EXPECT_EQ(rubble::monaghan_h_factor<D>(KernelType::CubicSpline), Real(0.5));  // its own h, exactly
+  const double cubic = 0.5 / sigma_over_H<D>(KernelType::CubicSpline);  // h_M / s of the cubic spline
+  for (KernelType k : {KernelType::WendlandC2, KernelType::WendlandC4, KernelType::WendlandC6})
+    EXPECT_NEAR(double(rubble::monaghan_h_factor<D>(k)), cubic * sigma_over_H<D>(k), 1e-10)
+        << rubble::kernel_name(k) << " D = " << D;
+}
+}  // namespace
+
+TEST(Kernels, MonaghanSmoothingLengthMatchesTheCubicSplineAtEqualResolution) {
+  check_monaghan_h_factor<1>();
+  check_monaghan_h_factor<2>();
+  check_monaghan_h_factor<3>();
+}

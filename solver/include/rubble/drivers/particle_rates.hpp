@@ -526,7 +526,7 @@ template <int D>
 RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  const Real hM = monaghan_h(s.h[a]);
+  const Real hM = monaghan_h<D>(c.kernel, s.h[a]);
   const Real cl = mat.shear_modulus > Real(0) ? elastic_signal_speed(s.cs[a], mat.shear_modulus, s.rho[a]) : s.cs[a];
   const Real dt_c = courant_dt(c.courant, hM, cl, mat.av.alpha, mat.av.beta, s.mu_max[a]);
   const Real dt_f = force_dt(c.force_factor, hM, norm(s.dvdt[a]));

@@ -79,7 +79,7 @@ RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(KernelType kernel, const HydroPart
 
   // Monaghan viscosity with pair-mean coefficients.
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
-  const Real hbar = monaghan_h(Real(0.5) * (a.h + b.h));
+  const Real hbar = monaghan_h<D>(kernel, Real(0.5) * (a.h + b.h));
   const Real mu = viscosity_mu(dot(dv, dx), r2, hbar);
   const Real rhobar = Real(0.5) * (a.rho + b.rho);
   const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);

@@ -183,6 +183,33 @@ RUBBLE_HD constexpr double kernel_default_hfact(KernelType k) {
   return 2.4;
 }
 
+// Monaghan's smoothing length h_M = monaghan_h_factor * H, the length of
+// the artificial viscosity's mu_ab and of the Courant limit. For the cubic
+// spline it is its own h = H/2 (Monaghan 1992). For the Wendland kernels it
+// is the cubic spline's h_M at the same resolution, i.e. at the same kernel
+// standard deviation s (see "Default H / Δx" above):
+//   h_M = (H/s)_cubic / (2 (H/s)_kernel) * H
+// so that a Wendland run gets the viscosity and time step of a cubic-spline
+// run of equal resolution rather than of equal support (H/2 for every
+// kernel gave 1.17x (C2) to 1.46x (C6) the cubic spline's mu_ab at the
+// default H/Δx; issue #17 item 5). Closed forms in 1-D and 3-D: C2 sqrt(2/7),
+// sqrt(2)/3; C4 1/sqrt(5), sqrt(20/117); C6 sqrt(2/13), sqrt(5)/6; the
+// values are checked against quadrature in test_kernels.cpp.
+template <int D>
+RUBBLE_HD_INLINE Real monaghan_h_factor(KernelType k) {
+  switch (k) {
+    case KernelType::CubicSpline:
+      return Real(0.5);
+    case KernelType::WendlandC2:
+      return D == 1 ? Real(0.534522483824849) : D == 2 ? Real(0.468544608526457) : Real(0.471404520791032);
+    case KernelType::WendlandC4:
+      return D == 1 ? Real(0.447213595499958) : D == 2 ? Real(0.409443749217463) : Real(0.413449115297363);
+    case KernelType::WendlandC6:
+      return D == 1 ? Real(0.392232270276368) : D == 2 ? Real(0.368081337434607) : Real(0.372677996249965);
+  }
+  return Real(0.5);
+}
+
 // ---- host-only helpers --------------------------------------------------------
 inline const char* kernel_name(KernelType k) {
   switch (k) {

@@ -74,7 +74,7 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
 
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
   const Real hbar = Real(0.5) * (a.h + b.h);
-  const Real mu = viscosity_mu(dot(dv, dx), r2, monaghan_h(hbar));
+  const Real mu = viscosity_mu(dot(dv, dx), r2, monaghan_h<D>(kernel, hbar));
   const Real rhobar = Real(0.5) * (a.rho + b.rho);
   const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
 
