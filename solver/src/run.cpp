@@ -630,24 +630,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     throw RunError(std::string("backend '") + backend_name(opt.backend) +
                    "' is not in this build (configure with -DRUBBLE_CUDA=ON on a machine with nvcc)");
 
-  FieldNeeds needs;
-  needs.summation_density = sim.density == DensityForm::Summation;
-  needs.continuity_density = sim.density == DensityForm::Continuity;
-  needs.gravity = scene.gravity.mode != GravityMode::Off;
-  for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
-  for (const BodyConfig& b : scene.bodies) {
-    needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
-    needs.free_slip = needs.free_slip || b.wall_free_slip;
-  }
-  needs.xsph = sim.xsph > 0;
-  for (const MaterialConfig& m : scene.materials) {
-    needs.porosity = needs.porosity || m.porosity.enabled;
-    needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;
-    // every Drucker-Prager material stores eps_v: its tension-cracking
-    // opening persists (and so does dilatant flow, psi > 0)
-    needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
-    needs.damage = needs.damage || m.damage.enabled;
-  }
+  const FieldNeeds needs = field_needs(scene);
   ParticleStore<D> ps;
   LoopStart start;
   std::vector<std::int64_t> body_first;

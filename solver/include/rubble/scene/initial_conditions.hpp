@@ -22,6 +22,10 @@ double lattice_cell_volume(Lattice lattice, double dx);
 // h = hfact (m/rho)^(1/D). Throws InputError if a body yields no particle or
 // a non-finite value. Returns where each body's particle ids begin: body k
 // holds ids [first[k], first[k + 1]) (size: bodies + 1).
+// The fields a run of this scene allocates (run_scene and the tools that
+// evaluate a scene's right-hand side outside the time loop).
+FieldNeeds field_needs(const Scene& scene);
+
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps);
