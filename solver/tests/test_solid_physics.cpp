@@ -290,10 +290,10 @@ void check_solid_pair_conservation() {
 TEST(SolidPair, ConservesMomentumAndEnergy2D) { check_solid_pair_conservation<2>(); }
 TEST(SolidPair, ConservesMomentumAndEnergy3D) { check_solid_pair_conservation<3>(); }
 
-// With S = 0 and no artificial stress the solid pair is the hydro pair in
-// its continuity-density form.
-TEST(SolidPair, ReducesToHydroWithoutStress) {
-  SolidParticle<2> a{}, b{};
+// Two neighbouring 2-D particles without stress (S = R = 0), approaching.
+static void stress_free_pair(SolidParticle<2>& a, SolidParticle<2>& b) {
+  a = SolidParticle<2>{};
+  b = SolidParticle<2>{};
   a.x = Vec<2>{{0.0, 0.0}};
   b.x = Vec<2>{{0.3, 0.1}};
   a.v = Vec<2>{{0.2, -0.1}};
@@ -301,6 +301,13 @@ TEST(SolidPair, ReducesToHydroWithoutStress) {
   a.m = 1; b.m = 1.2; a.rho = 1; b.rho = 1.1; a.p = 0.3; b.p = 0.1; a.h = 0.5; b.h = 0.55; a.cs = 1; b.cs = 1.1;
   a.S = b.S = a.R = b.R = Mat<2>::zero();
   a.av = b.av = {1.0, 2.0};
+}
+
+// With S = 0 and no artificial stress the solid pair is the hydro pair in
+// its continuity-density form.
+TEST(SolidPair, ReducesToHydroWithoutStress) {
+  SolidParticle<2> a, b;
+  stress_free_pair(a, b);
   const HydroParticle<2> ha{a.x, a.v, a.m, a.rho, a.p, 0.0, a.h, 1.0, a.cs, a.av, 0.0};
   const HydroParticle<2> hb{b.x, b.v, b.m, b.rho, b.p, 0.0, b.h, 1.0, b.cs, b.av, 0.0};
   const auto s = solid_pair<2>(KernelType::CubicSpline, a, b, a.x - b.x);
@@ -315,14 +322,8 @@ TEST(SolidPair, ReducesToHydroWithoutStress) {
 // goes through the solid pair (issue #17 item 6): its conductivity term must
 // be hydro_pair's, and it must act (not be dropped).
 TEST(SolidPair, KeepsTheArtificialConductivity) {
-  SolidParticle<2> a{}, b{};
-  a.x = Vec<2>{{0.0, 0.0}};
-  b.x = Vec<2>{{0.3, 0.1}};
-  a.v = Vec<2>{{0.2, -0.1}};
-  b.v = Vec<2>{{-0.3, 0.05}};
-  a.m = 1; b.m = 1.2; a.rho = 1; b.rho = 1.1; a.p = 0.3; b.p = 0.1; a.h = 0.5; b.h = 0.55; a.cs = 1; b.cs = 1.1;
-  a.S = b.S = a.R = b.R = Mat<2>::zero();
-  a.av = b.av = {1.0, 2.0};
+  SolidParticle<2> a, b;
+  stress_free_pair(a, b);
   a.u = 2.0; b.u = 0.5;
   const auto without = solid_pair<2>(KernelType::CubicSpline, a, b, a.x - b.x);
   a.alpha_u = 1.0; b.alpha_u = 0.6;

@@ -28,7 +28,8 @@ std::string block_scene(const std::string& material_extra, const std::string& ex
          extra_bodies;
 }
 
-std::vector<std::string> snapshot_datasets(const Scene& s, const std::string& name) {
+// Runs a 2-D scene in a temporary folder and returns its snapshot 1.
+ParticleStore<2> run_and_read_first_output(const Scene& s, const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
   std::filesystem::remove_all(dir);
   RunOptions opt;
@@ -39,7 +40,11 @@ std::vector<std::string> snapshot_datasets(const Scene& s, const std::string& na
   SnapshotMeta meta;
   read_snapshot<2>((dir / snapshot_filename(s.output.name, 1)).string(), ps, meta);
   std::filesystem::remove_all(dir);
-  return ps.allocated_fields();
+  return ps;
+}
+
+std::vector<std::string> snapshot_datasets(const Scene& s, const std::string& name) {
+  return run_and_read_first_output(s, name).allocated_fields();
 }
 
 bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
@@ -221,16 +226,7 @@ TEST(SolidRun, FluidKeepsItsConductivityNextToASolid) {
            "[output]\nname = \"mix\"\ninterval = 0.02\n";
   };
   auto gas_energy = [](const Scene& s, const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
-    std::filesystem::remove_all(dir);
-    RunOptions opt;
-    opt.out_dir = dir.string();
-    opt.quiet = true;
-    run_scene(s, opt);
-    ParticleStore<2> ps;
-    SnapshotMeta meta;
-    read_snapshot<2>((dir / snapshot_filename(s.output.name, 1)).string(), ps, meta);
-    std::filesystem::remove_all(dir);
+    const ParticleStore<2> ps = run_and_read_first_output(s, name);
     std::vector<double> u(ps.n);
     for (std::size_t i = 0; i < ps.n; ++i) u[std::size_t(ps.id[i])] = ps.material_id[i] == 0 ? ps.u[i] : 0.0;
     return u;
