@@ -21,6 +21,38 @@
 //                    thrust::transform_reduce over the particle index.
 // The sums over neighbours run in cell order, not in ascending index order
 // as on the CPU, so results differ by rounding (the parity test bounds it).
+//
+// Per-step host traffic (issue #15 item 5). Nothing is allocated inside a
+// step: buffers grow only when they must hold more than ever before (in
+// practice while the stepper is set up and in its first step), and the
+// sorts and reductions take their temporary storage from a caching
+// allocator (CachingDeviceAllocator) instead of a cudaMalloc and cudaFree
+// per call. All work is queued on one stream; the host waits for the
+// device only where it needs a result (a "host synchronisation", counted
+// in cuda_backend_counts()). Reductions that read the same data in the
+// same phase are one reduction over a struct. Per step:
+//   state check + next step's time-step limit   1  (StateCheck: the loop's
+//                    first_non_finite() after a step and dt_limit() before
+//                    the next read the same state)
+//   per right-hand-side evaluation              1  the grid's extent and
+//                    largest search radius (Extent)
+//     + summation density                       1  per smoothing-length
+//                    attempt (whether an h outgrew its search radius)
+//     + Barnes-Hut                              1  the octree's level
+//                    counts (its extent is the grid's)
+//     solids' correction fallbacks, direct gravity, sorts, scatters: none
+//   re-sort along the curve (every 16 steps)    1  the extent
+//   conserved.csv row (when one is due)         1
+// so a leapfrog step (one evaluation) of 3-D hydro with summation density
+// takes 3 (plus 1 every 16th step), of a continuity-density solid 2, and
+// with Barnes-Hut gravity one more; an RK2 step (three evaluations and its
+// error norm) 2 + 3 x (1, 2 or 3). Snapshots download the store (one copy
+// per field). Before issue #15 the 3-D hydro step took 11 (six per-axis
+// extent reductions, the largest radius, the time-step limit, the state
+// check, the h check and the cell sort, each with a cudaMalloc and a
+// cudaFree of Thrust's temporary storage), solids one more per evaluation
+// (their fallback count), and Barnes-Hut 3L + 10 more (L the tree's
+// levels: a scan and two copies per level).
 #include <cuda/functional>
 #include <cuda_runtime.h>
 #include <thrust/device_ptr.h>
@@ -28,15 +60,16 @@
 #include <thrust/functional.h>
 #include <thrust/iterator/counting_iterator.h>
 #include <thrust/reduce.h>
-#include <thrust/scan.h>
-#include <thrust/sequence.h>
 #include <thrust/sort.h>
+#include <thrust/system/cuda/execution_policy.h>
 #include <thrust/transform_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -79,6 +112,79 @@ namespace {
 
 constexpr unsigned kBlock = 128;
 
+// The counts behind cuda_backend_counts() (cuda_stepper.hpp).
+std::atomic<std::int64_t> g_device_allocations{0};
+std::atomic<std::int64_t> g_host_synchronisations{0};
+
+// Every cudaMalloc of the backend goes through here, so that it is counted.
+void* device_malloc(std::size_t bytes) {
+  void* p = nullptr;
+  RUBBLE_CUDA(cudaMalloc(&p, bytes));
+  ++g_device_allocations;
+  return p;
+}
+
+// A device-to-host copy into pageable host memory: the host waits for the
+// device's earlier work and the copy (one host synchronisation, counted).
+void copy_to_host(void* host, const void* device, std::size_t bytes) {
+  RUBBLE_CUDA(cudaMemcpy(host, device, bytes, cudaMemcpyDeviceToHost));
+  ++g_host_synchronisations;
+}
+
+// Temporary storage of Thrust's algorithms (radix sorts, reductions), kept
+// for reuse instead of Thrust's default cudaMalloc and cudaFree per call
+// (cudaFree also stalls the host until the device is idle). Passed through
+// the execution policy: thrust::cuda::par_nosync(alloc).
+//
+// A freed block goes back to the cache and the next request takes the
+// smallest cached block that fits; a block is released only by the
+// destructor. Every call asks for one temporary block at a time, its size a
+// function of the particle count (constant over a run), so once each call
+// of a step has run once every request finds its block: no allocation
+// inside a step after the first. Safe to reuse at once because all of the
+// backend's work is on one stream (the default): a kernel that still reads
+// a freed block runs before any later kernel that gets it.
+class CachingDeviceAllocator {
+ public:
+  using value_type = char;  // the interface Thrust expects of a temporary allocator
+
+  CachingDeviceAllocator() = default;
+  ~CachingDeviceAllocator() {
+    for (const auto& [bytes, p] : free_) cudaFree(p);  // no throw from a destructor
+    for (const auto& [p, bytes] : used_) cudaFree(p);
+  }
+  CachingDeviceAllocator(const CachingDeviceAllocator&) = delete;
+  CachingDeviceAllocator& operator=(const CachingDeviceAllocator&) = delete;
+
+  char* allocate(std::ptrdiff_t count) {
+    const std::size_t bytes = count > 0 ? std::size_t(count) : 1;
+    char* p = nullptr;
+    std::size_t size = bytes;
+    const auto fit = free_.lower_bound(bytes);  // the smallest cached block that is large enough
+    if (fit != free_.end()) {
+      size = fit->first;
+      p = fit->second;
+      free_.erase(fit);
+    } else {
+      p = static_cast<char*>(device_malloc(bytes));
+    }
+    used_.emplace(p, size);
+    return p;
+  }
+
+  // Thrust passes the requested size; the block's own size is in used_.
+  void deallocate(char* p, std::size_t) noexcept {
+    const auto it = used_.find(p);
+    if (it == used_.end()) return;  // not ours (cannot happen): leave it
+    free_.emplace(it->second, p);
+    used_.erase(it);
+  }
+
+ private:
+  std::multimap<std::size_t, char*> free_;  // cached blocks by size
+  std::map<char*, std::size_t> used_;       // blocks handed out, with their sizes
+};
+
 template <class F>
 __global__ void each_kernel(std::size_t n, F f) {
   const std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x;
@@ -94,15 +200,87 @@ void for_each_index(const char* what, std::size_t n, F f) {
   if (cuda::sync_check_enabled()) cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
 }
 
-// Reduce op(f(i)) over i in [0, n) on the device.
+// Reduce op(f(i)) over i in [0, n) on the device, temporary storage from
+// `alloc`. Returning the result to the host is one host synchronisation:
+// where several reductions read the same data in the same phase, they are
+// one reduction over a struct (Extent, StateCheck below).
 template <class T, class F, class Op>
-T reduce_index(std::size_t n, F f, T init, Op op) {
+T reduce_index(CachingDeviceAllocator& alloc, std::size_t n, F f, T init, Op op) {
+  if (n == 0) return init;
   const thrust::counting_iterator<std::size_t> first(0);
   // the device lambda's result type, stated for the host side of Thrust
-  T r = thrust::transform_reduce(thrust::device, first, first + n, ::cuda::proclaim_return_type<T>(f), init, op);
+  T r = thrust::transform_reduce(thrust::cuda::par_nosync(alloc), first, first + n,
+                                 ::cuda::proclaim_return_type<T>(f), init, op);
   cuda::check(cudaGetLastError(), "thrust::transform_reduce", __FILE__, __LINE__);
+  ++g_host_synchronisations;
   return r;
 }
+
+// Stable radix sort of (key, value) pairs on the device, temporary storage
+// from `alloc`; par_nosync: the host does not wait for it.
+template <class K, class V>
+void sort_pairs(CachingDeviceAllocator& alloc, K* keys, V* values, std::size_t n, const char* what) {
+  if (n == 0) return;
+  thrust::sort_by_key(thrust::cuda::par_nosync(alloc), thrust::device_pointer_cast(keys),
+                      thrust::device_pointer_cast(keys + n), thrust::device_pointer_cast(values));
+  cuda::check(cudaGetLastError(), what, __FILE__, __LINE__);
+  if (cuda::sync_check_enabled()) cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
+}
+
+// The particles' extent on every axis and, where R is given, their largest
+// search radius: one reduction where the grid needs all three.
+template <int D>
+struct Extent {
+  Vec<D> lo, hi;
+  Real r_max;
+};
+
+// thrust::minimum's and thrust::maximum's rules, per component.
+template <int D>
+struct ExtentUnion {
+  __host__ __device__ Extent<D> operator()(const Extent<D>& a, const Extent<D>& b) const {
+    Extent<D> r;
+    for (int k = 0; k < D; ++k) {
+      r.lo[k] = a.lo[k] < b.lo[k] ? a.lo[k] : b.lo[k];
+      r.hi[k] = a.hi[k] < b.hi[k] ? b.hi[k] : a.hi[k];
+    }
+    r.r_max = a.r_max < b.r_max ? b.r_max : a.r_max;
+    return r;
+  }
+};
+
+template <int D>
+Extent<D> extent_of(CachingDeviceAllocator& alloc, const Vec<D>* x, const Real* R, std::size_t n) {
+  Extent<D> init;
+  for (int k = 0; k < D; ++k) {
+    init.lo[k] = std::numeric_limits<Real>::max();
+    init.hi[k] = std::numeric_limits<Real>::lowest();
+  }
+  init.r_max = Real(0);
+  return reduce_index<Extent<D>>(
+      alloc, n,
+      [=] __device__(std::size_t i) {
+        Extent<D> e;
+        e.lo = x[i];
+        e.hi = x[i];
+        e.r_max = R ? R[i] : Real(0);
+        return e;
+      },
+      init, ExtentUnion<D>());
+}
+
+// The state check after a step and the next step's time-step limit read
+// the same state: one reduction (CudaStepper::first_non_finite).
+struct StateCheck {
+  std::size_t first_bad;  // the first particle with a non-finite value (n: none)
+  Real dt;                // the smallest per-particle time-step limit
+};
+
+struct StateCheckMin {
+  __host__ __device__ StateCheck operator()(const StateCheck& a, const StateCheck& b) const {
+    return {a.first_bad < b.first_bad ? a.first_bad : b.first_bad, a.dt < b.dt ? a.dt : b.dt};
+  }
+};
 
 // An owned device allocation (move-only).
 class DeviceBuffer {
@@ -123,7 +301,7 @@ class DeviceBuffer {
     if (p_) RUBBLE_CUDA(cudaFree(p_));
     p_ = nullptr;
     bytes_ = 0;
-    RUBBLE_CUDA(cudaMalloc(&p_, bytes));
+    p_ = device_malloc(bytes);
     bytes_ = bytes;
   }
   void* get() const { return p_; }
@@ -181,7 +359,7 @@ class DeviceStore {
   std::size_t download(ParticleStore<D>& ps) const {
     std::size_t total = 0;
     for_each_pair(ps, [&](const Field& d, void* host, std::size_t bytes) {
-      RUBBLE_CUDA(cudaMemcpy(host, d.buf.get(), bytes, cudaMemcpyDeviceToHost));
+      copy_to_host(host, d.buf.get(), bytes);
       total += bytes;
     });
     return total;
@@ -294,25 +472,94 @@ struct DeviceArray {
 // (octree_field, as Octree with group_size 0 or 1). The same tree as the
 // CPU's, node for node; with the CPU's default group walk the fields differ
 // by the multipole error, not by rounding.
+//
+// Host synchronisations: one per build (the level counts), plus the extent
+// reduction when the caller does not pass the extent (the stepper passes
+// the neighbour grid's, computed from the same positions in the same
+// evaluation).
+//
+// Why the discovery needs no copy per level. The breadth-first levels are
+// discovered on the device with their counts kept there: a node's children
+// take their places in the next level with one atomicAdd on that level's
+// count, and every level's kernel is launched without the host knowing its
+// size (a grid-stride loop over the count it reads from device memory).
+// That needs, known beforehand,
+//   - the number of levels: at most kOctreeMaxLevel + 1, since each level
+//     starts at least one key level below its parent's (octree_split_level)
+//     and a node at the finest key level is a leaf;
+//   - room for the nodes: the levels are stored one after the other in one
+//     array. Every inner node has at least two children (levels where all
+//     particles fall into one octant are skipped) and every leaf at least
+//     one particle, so a tree has at most 2n - 1 nodes. The array starts
+//     smaller (most trees have far fewer nodes), a child that does not fit
+//     sets an overflow flag that stops the later levels, and the build is
+//     repeated with twice the room, up to 2n - 1 (kept for later builds).
+// After the discovery the level counts (a few bytes) are downloaded once:
+// the host then knows every level's size and offset and the node count, and
+// the remaining passes run as exact per-level launches, as before. The
+// order of a level's nodes depends on the order of the atomic adds, but
+// nothing else does: a node's children stay contiguous and in octant order,
+// and the depth-first ids (from subtree sizes) fix the final node array.
+// The remaining passes launch one kernel per level, with no host
+// synchronisation.
+constexpr std::uint32_t kOctreeLevels = kOctreeMaxLevel + 1;  // breadth-first levels at most
+// The device counts: one per level; one more for the children of the
+// deepest level (there are none: it must stay 0); an overflow flag.
+constexpr std::uint32_t kOctreeCountSlots = kOctreeLevels + 2;
+constexpr std::uint32_t kOctreeOverflow = kOctreeLevels + 1;
+constexpr unsigned kMaxGridStrideBlocks = 2048;
+
+// Discovery of level l (one launch per level): the level's nodes are
+// nodes[begin, begin + counts[l]), begin the sum of the earlier levels'
+// counts; their pending ranges are at the same indices of `pending`. Each
+// node is discovered (octree_discover) and its children are appended to the
+// next level: parent and first_child are indices within their levels, as
+// octree_build_by_levels has them.
+__global__ void octree_discover_level(std::uint32_t l, const std::uint64_t* keys, std::uint32_t leaf_size,
+                                      OctreePending* pending, OctreeLevelNode* nodes, std::uint32_t* counts,
+                                      std::size_t capacity) {
+  if (counts[kOctreeOverflow] != 0) return;  // an earlier level did not fit: the build is repeated
+  std::size_t begin = 0;
+  for (std::uint32_t j = 0; j < l; ++j) begin += counts[j];
+  const std::uint32_t F = counts[l];
+  const std::size_t next_begin = begin + F;
+  const std::size_t stride = std::size_t(gridDim.x) * blockDim.x;
+  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < F; i += stride) {
+    OctreeLevelNode& nd = nodes[begin + i];
+    std::uint32_t first[9];
+    const std::uint32_t c = octree_discover(keys, pending[begin + i], leaf_size, nd, first);
+    if (c == 0) continue;
+    // a level's nodes are disjoint non-empty particle ranges, so no count
+    // exceeds n (< 2^31, checked by the caller): no wrap-around
+    const std::uint32_t slot = atomicAdd(&counts[l + 1], c);
+    if (next_begin + slot + c > capacity) {
+      atomicOr(&counts[kOctreeOverflow], 1u);
+      continue;
+    }
+    nd.first_child = slot;
+    for (std::uint32_t k = 0; k < c; ++k)
+      pending[next_begin + slot + k] = OctreePending{first[k], first[k + 1], nd.node.level + 1, std::uint32_t(i)};
+  }
+}
+
 class DeviceOctree {
  public:
   // Field of n particles (device arrays x, m, eps; store order) times G:
   // a_grav and phi written, a_grav added to dvdt when dvdt is not null.
-  // Build and walk times (device-synchronised) go to *timing when given.
+  // `extent`: the positions' extent when the caller has it (else reduced
+  // here). Build and walk times (device-synchronised) go to *timing when
+  // given.
   void field(const Vec<3>* x, const Real* m, const Real* e, std::size_t count, const GravityConfig& gravity,
-             KernelType kernel, Vec<3>* a_grav, Real* phi, Vec<3>* dvdt, DeviceGravityTiming* timing = nullptr) {
+             KernelType kernel, Vec<3>* a_grav, Real* phi, Vec<3>* dvdt, const Extent<3>* extent = nullptr,
+             DeviceGravityTiming* timing = nullptr) {
     if (count == 0) return;
+    // node indices are 32-bit and a tree has up to 2n - 1 nodes
+    if (count > (std::size_t(1) << 31)) throw RunError("Barnes-Hut on the device: more than 2^31 particles");
     const auto t0 = std::chrono::steady_clock::now();
     const std::uint32_t n32 = std::uint32_t(count);
     // the tree's keys and sorted copies
-    Vec<3> mn, mx;
-    for (int k = 0; k < 3; ++k) {
-      mn[k] = reduce_index<Real>(count, [=] __device__(std::size_t i) { return x[i][k]; },
-                                 std::numeric_limits<Real>::max(), thrust::minimum<Real>());
-      mx[k] = reduce_index<Real>(count, [=] __device__(std::size_t i) { return x[i][k]; },
-                                 std::numeric_limits<Real>::lowest(), thrust::maximum<Real>());
-    }
-    const Box<3> kb = octree_key_box(bounding_box_from_extent<3>(Box<3>{}, mn, mx));
+    const Extent<3> ext = extent ? *extent : extent_of<3>(temp_, x, nullptr, count);
+    const Box<3> kb = octree_key_box(bounding_box_from_extent<3>(Box<3>{}, ext.lo, ext.hi));
     keys_.resize(count);
     order_.resize(count);
     x_.resize(count);
@@ -324,9 +571,7 @@ class DeviceOctree {
       k[i] = morton_key<3>(x[i], kb);
       o[i] = std::uint32_t(i);
     });
-    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
-                        thrust::device_pointer_cast(o));
-    cuda::check(cudaGetLastError(), "thrust::sort_by_key (tree keys)", __FILE__, __LINE__);
+    sort_pairs(temp_, k, o, count, "thrust::sort_by_key (tree keys)");
     Vec<3>* tx = x_.data();
     Real* tm = m_.data();
     Real* te = eps_.data();
@@ -336,81 +581,79 @@ class DeviceOctree {
       te[j] = e[o[j]];
     });
 
-    // 1. discovery, level by level
-    const std::uint32_t leaf_size = std::uint32_t(gravity.leaf_size);
-    std::size_t L = 0;  // levels in use (their arrays are kept between calls)
-    int cur = 0;
-    frontier_[cur].resize(1);
-    const OctreePending root{0, n32, 0, 0xFFFFFFFFu};
-    RUBBLE_CUDA(cudaMemcpy(frontier_[cur].data(), &root, sizeof root, cudaMemcpyHostToDevice));
-    std::size_t F = 1;
-    while (F > 0) {
-      if (L == levels_.size()) levels_.emplace_back();
-      levels_[L].resize(F);
-      counts_.resize(F);
-      offsets_.resize(F);
-      OctreeLevelNode* lv = levels_[L++].data();
-      const OctreePending* fr = frontier_[cur].data();
+    // 1. discovery, all levels on the device; then the level counts, once
+    const std::uint32_t leaf_size = std::uint32_t(std::max(1, gravity.leaf_size));
+    const std::size_t bound = 2 * count - 1;  // nodes of any tree of `count` particles (above)
+    // first guess: uniform particles make about 0.5 n nodes at leaf_size 8
+    // and 0.12 n at 32 (a host simulation of this build), clustered ones fewer
+    if (capacity_ == 0) capacity_ = std::min(bound, std::max<std::size_t>(1024, 6 * count / leaf_size));
+    counts_.resize(kOctreeCountSlots);
+    std::uint32_t counts[kOctreeCountSlots];
+    for (;;) {
+      pending_.resize(capacity_);
+      lnodes_.resize(capacity_);
+      OctreePending* pend = pending_.data();
+      OctreeLevelNode* lnodes = lnodes_.data();
       std::uint32_t* cnt = counts_.data();
-      std::uint32_t* off = offsets_.data();
-      for_each_index("octree discovery", F, [=] __device__(std::size_t i) {
-        std::uint32_t first[9];
-        cnt[i] = octree_discover(k, fr[i], leaf_size, lv[i], first);
+      for_each_index("octree root", kOctreeCountSlots, [=] __device__(std::size_t i) {
+        cnt[i] = i == 0 ? 1u : 0u;
+        if (i == 0) pend[0] = OctreePending{0, n32, 0, 0xFFFFFFFFu};
       });
-      thrust::exclusive_scan(thrust::device, thrust::device_pointer_cast(cnt), thrust::device_pointer_cast(cnt + F),
-                             thrust::device_pointer_cast(off));
-      cuda::check(cudaGetLastError(), "thrust::exclusive_scan (octree children)", __FILE__, __LINE__);
-      std::uint32_t last_off = 0, last_cnt = 0;
-      RUBBLE_CUDA(cudaMemcpy(&last_off, off + F - 1, sizeof last_off, cudaMemcpyDeviceToHost));
-      RUBBLE_CUDA(cudaMemcpy(&last_cnt, cnt + F - 1, sizeof last_cnt, cudaMemcpyDeviceToHost));
-      const std::size_t total = std::size_t(last_off) + last_cnt;
-      frontier_[1 - cur].resize(std::max<std::size_t>(total, 1));
-      OctreePending* nx = frontier_[1 - cur].data();
-      for_each_index("octree children", F, [=] __device__(std::size_t i) {
-        lv[i].first_child = off[i];
-        if (cnt[i] == 0) return;
-        std::uint32_t first[9];
-        octree_children(k, lv[i].node.begin, lv[i].node.end, lv[i].node.level, first);
-        for (std::uint32_t c = 0; c < cnt[i]; ++c)
-          nx[off[i] + c] = OctreePending{first[c], first[c + 1], lv[i].node.level + 1, std::uint32_t(i)};
-      });
-      cur = 1 - cur;
-      F = total;
+      for (std::uint32_t l = 0; l < kOctreeLevels; ++l) {
+        // level l has at most min(n, 8^l) nodes
+        const std::size_t most = l < 10 ? std::min<std::size_t>(count, std::size_t(1) << (3 * l)) : count;
+        const unsigned blocks = unsigned(std::min<std::size_t>((most + kBlock - 1) / kBlock, kMaxGridStrideBlocks));
+        octree_discover_level<<<blocks, kBlock>>>(l, k, leaf_size, pend, lnodes, cnt, capacity_);
+        cuda::check(cudaGetLastError(), "octree discovery", __FILE__, __LINE__);
+        if (cuda::sync_check_enabled()) cuda::check(cudaDeviceSynchronize(), "octree discovery", __FILE__, __LINE__);
+      }
+      copy_to_host(counts, cnt, sizeof counts);  // the build's one host synchronisation
+      if (counts[kOctreeOverflow] == 0) break;
+      if (capacity_ >= bound) throw RunError("octree build: more nodes than a tree can have (a bug)");
+      capacity_ = std::min(bound, 2 * capacity_);
     }
+    std::size_t L = 0, node_count = 0;  // levels in use, nodes in all
+    std::size_t begin[kOctreeLevels];   // each level's first node in lnodes_
+    while (L < kOctreeLevels && counts[L] > 0) {
+      begin[L] = node_count;
+      node_count += counts[L++];
+    }
+    for (std::size_t l = L; l <= kOctreeLevels; ++l)
+      if (counts[l] != 0) throw RunError("octree build: a level below an empty one (a bug)");
+    if (node_count > capacity_) throw RunError("octree build: more nodes than room (a bug)");
+    OctreeLevelNode* const lnodes = lnodes_.data();
     // 2. subtree sizes, bottom up
     for (std::size_t l = L; l-- > 1;) {
-      const OctreeLevelNode* lv = levels_[l].data();
-      OctreeLevelNode* up = levels_[l - 1].data();
-      for_each_index("octree sizes", levels_[l].n, [=] __device__(std::size_t i) {
+      const OctreeLevelNode* lv = lnodes + begin[l];
+      OctreeLevelNode* up = lnodes + begin[l - 1];
+      for_each_index("octree sizes", counts[l], [=] __device__(std::size_t i) {
         atomicAdd(reinterpret_cast<unsigned int*>(&up[lv[i].parent].size), unsigned(lv[i].size));
       });
     }
-    // 3. depth-first ids, top down
+    // 3. depth-first ids, top down (the root's id, 0, is set by the discovery)
     for (std::size_t l = 0; l + 1 < L; ++l) {
-      const OctreeLevelNode* lv = levels_[l].data();
-      OctreeLevelNode* down = levels_[l + 1].data();
-      for_each_index("octree ids", levels_[l].n, [=] __device__(std::size_t i) { octree_number_children(lv[i], down); });
+      const OctreeLevelNode* lv = lnodes + begin[l];
+      OctreeLevelNode* down = lnodes + begin[l + 1];
+      for_each_index("octree ids", counts[l], [=] __device__(std::size_t i) { octree_number_children(lv[i], down); });
     }
-    OctreeLevelNode root_node;
-    RUBBLE_CUDA(cudaMemcpy(&root_node, levels_[0].data(), sizeof root_node, cudaMemcpyDeviceToHost));
-    const std::uint32_t node_count = root_node.size;
+    // every node is in the root's subtree: its size is node_count
     nodes_.resize(node_count);
     OctreeNode* nodes = nodes_.data();
     // 4. moments bottom up, into the depth-first array
     const Real theta = Real(gravity.theta);
     for (std::size_t l = L; l-- > 0;) {
-      OctreeLevelNode* lv = levels_[l].data();
-      const OctreeLevelNode* next = l + 1 < L ? levels_[l + 1].data() : nullptr;
-      for_each_index("octree moments", levels_[l].n, [=] __device__(std::size_t i) {
+      OctreeLevelNode* lv = lnodes + begin[l];
+      const OctreeLevelNode* next = l + 1 < L ? lnodes + begin[l + 1] : nullptr;
+      for_each_index("octree moments", counts[l], [=] __device__(std::size_t i) {
         nodes[lv[i].id] = octree_finish_level_node(lv[i], next, k, tx, tm, te, kb, theta);
       });
     }
-    RUBBLE_CUDA(cudaDeviceSynchronize());
+    if (timing) RUBBLE_CUDA(cudaDeviceSynchronize());  // only to time the build
     const auto t1 = std::chrono::steady_clock::now();
     // 5. one walk per particle
     OctreeView view;
     view.nodes = nodes;
-    view.node_count = node_count;
+    view.node_count = std::uint32_t(node_count);
     view.x = tx;
     view.m = tm;
     view.eps = te;
@@ -428,18 +671,20 @@ class DeviceOctree {
       RUBBLE_CUDA(cudaDeviceSynchronize());
       timing->build_seconds = std::chrono::duration<double>(t1 - t0).count();
       timing->walk_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      timing->nodes = node_count;
+      timing->nodes = std::uint32_t(node_count);
     }
   }
 
  private:
+  CachingDeviceAllocator temp_;  // the sort's and the extent's temporary storage
   DeviceArray<std::uint64_t> keys_;
-  DeviceArray<std::uint32_t> order_, counts_, offsets_;
+  DeviceArray<std::uint32_t> order_, counts_;
   DeviceArray<Vec<3>> x_;
   DeviceArray<Real> m_, eps_;
-  DeviceArray<OctreePending> frontier_[2];
-  std::vector<DeviceArray<OctreeLevelNode>> levels_;
-  DeviceArray<OctreeNode> nodes_;
+  std::size_t capacity_ = 0;            // room for nodes in pending_ and lnodes_ (grows, kept)
+  DeviceArray<OctreePending> pending_;  // every level's pending ranges, level after level
+  DeviceArray<OctreeLevelNode> lnodes_; // every level's nodes, at the same indices
+  DeviceArray<OctreeNode> nodes_;       // the depth-first node array the walk reads
 };
 
 }  // namespace
@@ -452,6 +697,7 @@ struct CudaStepper<D>::Impl {
   DeviceArray<MaterialParams> materials;
   DeviceStore<D> store;
   DeviceBuffer scratch;
+  CachingDeviceAllocator temp;  // temporary storage of the sorts and reductions
   KernelType kernel;
   Real hfact, courant, force_factor, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
@@ -465,6 +711,7 @@ struct CudaStepper<D>::Impl {
   DeviceArray<std::uint64_t> keys;
   DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
   GridNeighbors<D> grid{};
+  Extent<D> grid_extent{};  // the positions' extent when the grid was built (Barnes-Hut reuses it)
   // integrator scratch
   DeviceArray<Vec<D>> v_half, shift;  // shift: particle shifting
   DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start, damage_half;
@@ -473,7 +720,17 @@ struct CudaStepper<D>::Impl {
   DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
   ParticleStore<D> good_host;    // last_good(): their host copy
   DeviceOctree octree;  // Barnes-Hut (3-D)
-  std::int64_t fallbacks_total = 0, evaluations = 0;
+  // kernel-gradient correction fallbacks, counted on the device (atomicAdd
+  // in the solid gradient kernel) and downloaded only when asked for
+  DeviceArray<unsigned long long> fallbacks;
+  std::int64_t evaluations = 0;
+  // The time-step limit of the current state, when known: the state check
+  // after a step computes it with the check (StateCheck), for the next
+  // step's dt_limit(). Forgotten by whatever changes the state (leapfrog,
+  // rk2, damp); a sort keeps it (a minimum over per-particle values does
+  // not depend on their order).
+  bool dt_known = false;
+  Real dt_cached = 0;
   bool host_current = true;
   std::int64_t bytes_downloaded = 0;  // device-to-host bytes of host()
 
@@ -518,6 +775,8 @@ struct CudaStepper<D>::Impl {
     keys.resize(n);
     order.resize(n);
     perm.resize(n);
+    fallbacks.resize(1);
+    RUBBLE_CUDA(cudaMemset(fallbacks.data(), 0, sizeof(unsigned long long)));
   }
 
   std::size_t n() const { return store.size(); }
@@ -540,24 +799,13 @@ struct CudaStepper<D>::Impl {
     return c;
   }
 
-  // The particles' extent on every axis (min, max), reduced on the device.
-  void extent(Vec<D>& mn, Vec<D>& mx) const {
-    const Vec<D>* x = store.view().x;
-    for (int k = 0; k < D; ++k) {
-      mn[k] = reduce_index<Real>(n(), [=] __device__(std::size_t i) { return x[i][k]; },
-                                 std::numeric_limits<Real>::max(), thrust::minimum<Real>());
-      mx[k] = reduce_index<Real>(n(), [=] __device__(std::size_t i) { return x[i][k]; },
-                                 std::numeric_limits<Real>::lowest(), thrust::maximum<Real>());
-    }
-  }
-
   // Sort along the space-filling curve: the CPU's permutation, on the device.
+  // One host synchronisation (the extent).
   void sort_particles() {
     const std::size_t count = n();
     if (count == 0) return;
-    Vec<D> mn, mx;
-    extent(mn, mx);
-    const Box<D> box = bounding_box_from_extent<D>(domain, mn, mx);
+    const Extent<D> ext = extent_of<D>(temp, store.view().x, nullptr, count);
+    const Box<D> box = bounding_box_from_extent<D>(domain, ext.lo, ext.hi);
     const Vec<D>* x = store.view().x;
     std::uint64_t* k = keys.data();
     std::uint32_t* p = perm.data();
@@ -566,32 +814,34 @@ struct CudaStepper<D>::Impl {
       p[i] = std::uint32_t(i);
     });
     // LSD radix sort: stable, so equal keys keep their index order as on the CPU
-    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(k), thrust::device_pointer_cast(k + count),
-                        thrust::device_pointer_cast(p));
-    cuda::check(cudaGetLastError(), "thrust::sort_by_key (Morton keys)", __FILE__, __LINE__);
+    sort_pairs(temp, k, p, count, "thrust::sort_by_key (Morton keys)");
     store.permute(p, scratch);
     host_current = false;
   }
 
-  // The grid cell list for search radii R (device array of n).
+  // The grid cell list for search radii R (device array of n). One host
+  // synchronisation: the extent and the largest radius, one reduction.
   void build_grid(const Real* R) {
     const std::size_t count = n();
-    Real r_max = reduce_index<Real>(count, [=] __device__(std::size_t i) { return R[i]; }, Real(0),
-                                    thrust::maximum<Real>());
+    const Extent<D> ext = extent_of<D>(temp, store.view().x, R, count);
+    const Real r_max = ext.r_max;
     if (!(r_max > Real(0)) || !std::isfinite(r_max)) throw RunError("non-positive or non-finite search radius");
-    Vec<D> mn, mx;
-    extent(mn, mx);
     for (int k = 0; k < D; ++k)
-      if (!std::isfinite(mn[k]) || !std::isfinite(mx[k])) throw RunError("non-finite particle position");
+      if (!std::isfinite(ext.lo[k]) || !std::isfinite(ext.hi[k])) throw RunError("non-finite particle position");
+    grid_extent = ext;
     GridNeighbors<D> g{};
     try {
-      g.grid = make_uniform_grid<D>(domain, mn, mx, r_max, std::max(64.0, 4.0 * double(count)));
+      g.grid = make_uniform_grid<D>(domain, ext.lo, ext.hi, r_max, std::max(64.0, 4.0 * double(count)));
     } catch (const std::invalid_argument& e) {
       throw RunError(e.what());
     }
     const std::size_t cells = g.grid.cell_count();
-    cell_start.resize(cells);
-    cell_end.resize(cells);
+    // grown with a quarter to spare, so that a grid a few cells larger later
+    // in the run needs no new allocation
+    if (cells > cell_start.n) {
+      cell_start.resize(cells + cells / 4);
+      cell_end.resize(cells + cells / 4);
+    }
     RUBBLE_CUDA(cudaMemset(cell_start.data(), 0, cells * sizeof(std::uint32_t)));
     RUBBLE_CUDA(cudaMemset(cell_end.data(), 0, cells * sizeof(std::uint32_t)));
 
@@ -608,9 +858,7 @@ struct CudaStepper<D>::Impl {
       cell[i] = gg.grid.cell_of(gg.x[i]);
       ord[i] = std::uint32_t(i);
     });
-    thrust::sort_by_key(thrust::device, thrust::device_pointer_cast(cell), thrust::device_pointer_cast(cell + count),
-                        thrust::device_pointer_cast(ord));
-    cuda::check(cudaGetLastError(), "thrust::sort_by_key (cells)", __FILE__, __LINE__);
+    sort_pairs(temp, cell, ord, count, "thrust::sort_by_key (cells)");
     std::uint32_t* st = cell_start.data();
     std::uint32_t* en = cell_end.data();
     for_each_index("cell ranges", count, [=] __device__(std::size_t i) {
@@ -639,7 +887,9 @@ struct CudaStepper<D>::Impl {
         // written only after this kernel (below), not here
         flag[i] = summation_density_particle<D>(c, std::uint32_t(i), R[i], each) ? 0 : 1;
       });
-      const int outgrown = reduce_index<int>(count, [=] __device__(std::size_t i) { return flag[i]; }, 0,
+      // one host synchronisation per attempt (the host decides whether to
+      // rebuild); one attempt in a step where no h outgrew its radius
+      const int outgrown = reduce_index<int>(temp, count, [=] __device__(std::size_t i) { return flag[i]; }, 0,
                                              thrust::plus<int>());
       if (outgrown == 0) return;
       for_each_index("grown search radius", count, [=] __device__(std::size_t i) {
@@ -674,15 +924,12 @@ struct CudaStepper<D>::Impl {
         wall_extrapolation_particle<D>(c, std::uint32_t(i), each);
       });
     if (solid) {
-      int* flag = flags.data();
+      unsigned long long* fb = fallbacks.data();
       for_each_index("solid velocity gradient", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
         each.a = std::uint32_t(i);
-        flag[i] = solid_gradient_particle<D>(c, std::uint32_t(i), each) ? 0 : 1;
+        if (!solid_gradient_particle<D>(c, std::uint32_t(i), each)) atomicAdd(fb, 1ull);  // rare
       });
-      fallbacks_total +=
-          reduce_index<std::int64_t>(count, [=] __device__(std::size_t i) { return std::int64_t(flag[i]); },
-                                     std::int64_t(0), thrust::plus<std::int64_t>());
       for_each_index("solid rates", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
         each.a = std::uint32_t(i);
@@ -744,7 +991,8 @@ struct CudaStepper<D>::Impl {
       const Real eps_fixed = Real(gravity.softening_length);
       const StoreView<3> s = c.s;
       for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
-      octree.field(s.x, s.m, e, count, gravity, kernel, s.a_grav, s.phi, s.dvdt);
+      // the grid's extent: the same positions, reduced earlier in this evaluation
+      octree.field(s.x, s.m, e, count, gravity, kernel, s.a_grav, s.phi, s.dvdt, &grid_extent);
     } else {
       (void)c;
       throw RunError("self-gravity needs a 3-D scene");
@@ -786,14 +1034,29 @@ struct CudaStepper<D>::Impl {
     }
   }
 
-  double dt_limit() {
+  // The first non-finite particle and the time-step limit: one reduction.
+  StateCheck check_state() {
     const RhsContext<D> c = context();
-    return double(reduce_index<Real>(
-        n(), [=] __device__(std::size_t i) { return dt_limit_particle<D>(c, std::uint32_t(i)); }, Real(1e30),
-        thrust::minimum<Real>()));
+    const std::size_t count = n();
+    const StateCheck r = reduce_index<StateCheck>(
+        temp, count,
+        [=] __device__(std::size_t i) {
+          return StateCheck{finite_particle<D>(c.s, std::uint32_t(i)) ? count : i,
+                            dt_limit_particle<D>(c, std::uint32_t(i))};
+        },
+        StateCheck{count, Real(1e30)}, StateCheckMin());
+    dt_cached = r.dt;
+    dt_known = true;
+    return r;
+  }
+
+  double dt_limit() {
+    if (!dt_known) check_state();
+    return double(dt_cached);
   }
 
   void leapfrog(Real dt) {
+    dt_known = false;
     const std::size_t count = n();
     const StoreView<D> s = store.view();
     v_half.resize(count);
@@ -821,6 +1084,7 @@ struct CudaStepper<D>::Impl {
   }
 
   Rk2Result rk2(Real dt, Real tol, Real dt_min) {
+    dt_known = false;
     const std::size_t count = n();
     if (y0.size() != count) {
       y0.allocate_as(store);
@@ -842,7 +1106,7 @@ struct CudaStepper<D>::Impl {
       evaluate();  // k3 = rates in the store
       const Real c23 = Real(2) / Real(3) * dt;
       const Real err = reduce_index<Real>(
-          count, [=] __device__(std::size_t i) { return rk2_error_particle<D>(v0, v1, y, c23, i); }, Real(0),
+          temp, count, [=] __device__(std::size_t i) { return rk2_error_particle<D>(v0, v1, y, c23, i); }, Real(0),
           thrust::maximum<Real>());
       const Real factor = rk2_step_factor(err, tol);
       if (err <= tol || dt <= dt_min) {
@@ -898,15 +1162,14 @@ void CudaStepper<D>::damp(double f) {
   const Real fr = Real(f);
   for_each_index("damping", impl_->n(), [=] __device__(std::size_t i) { s.v[i] *= fr; });
   impl_->host_current = false;
+  impl_->dt_known = false;
 }
 
+// With the next step's time-step limit (Impl::check_state): the loop asks
+// for both of the same state.
 template <int D>
 std::size_t CudaStepper<D>::first_non_finite() {
-  const StoreView<D> s = impl_->store.view();
-  const std::size_t count = impl_->n();
-  return reduce_index<std::size_t>(
-      count, [=] __device__(std::size_t i) { return finite_particle<D>(s, std::uint32_t(i)) ? count : i; }, count,
-      thrust::minimum<std::size_t>());
+  return impl_->check_state().first_bad;
 }
 
 template <int D>
@@ -914,7 +1177,7 @@ ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt
   const StoreView<D> s = impl_->store.view();
   const Vec<D> g = impl_->g;
   const ConservedSums sum = reduce_index<ConservedSums>(
-      impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); }, ConservedSums{},
+      impl_->temp, impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); }, ConservedSums{},
       thrust::plus<ConservedSums>());
   return conserved_record(sum, t, step, dt);
 }
@@ -952,7 +1215,9 @@ std::int64_t CudaStepper<D>::bytes_downloaded() const {
 
 template <int D>
 std::int64_t CudaStepper<D>::correction_fallbacks() const {
-  return impl_->fallbacks_total;
+  unsigned long long count = 0;
+  copy_to_host(&count, impl_->fallbacks.data(), sizeof count);
+  return std::int64_t(count);
 }
 
 template <int D>
@@ -963,6 +1228,10 @@ std::int64_t CudaStepper<D>::evaluations() const {
 template <int D>
 bool CudaStepper<D>::solid() const {
   return impl_->solid;
+}
+
+CudaBackendCounts cuda_backend_counts() {
+  return {g_device_allocations.load(), g_host_synchronisations.load()};
 }
 
 DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>* x, const Real* m, const Real* eps, std::size_t n,
@@ -983,9 +1252,9 @@ DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>* x, const Real* m, const 
   RUBBLE_CUDA(cudaMemcpy(de.data(), e.data(), n * sizeof(Real), cudaMemcpyHostToDevice));
   DeviceOctree tree;
   DeviceGravityTiming t;
-  tree.field(dx.data(), dm.data(), de.data(), n, gravity, kernel, da.data(), dp.data(), nullptr, &t);
-  RUBBLE_CUDA(cudaMemcpy(acc, da.data(), n * sizeof(Vec<3>), cudaMemcpyDeviceToHost));
-  if (phi) RUBBLE_CUDA(cudaMemcpy(phi, dp.data(), n * sizeof(Real), cudaMemcpyDeviceToHost));
+  tree.field(dx.data(), dm.data(), de.data(), n, gravity, kernel, da.data(), dp.data(), nullptr, nullptr, &t);
+  copy_to_host(acc, da.data(), n * sizeof(Vec<3>));
+  if (phi) copy_to_host(phi, dp.data(), n * sizeof(Real));
   return t;
 }
 
