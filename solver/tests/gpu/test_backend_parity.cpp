@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "../../src/cuda/cuda_stepper.hpp"  // cuda_backend_counts()
 #include "parity_scenes.hpp"
 #include "rubble/run.hpp"
 
@@ -106,6 +107,35 @@ TEST_P(BackendParity, HundredStepsConservedQuantities) {
   const FinalState cpu = run_on(sc.make(100), Backend::Cpu), gpu = run_on(sc.make(100), Backend::Cuda);
   EXPECT_EQ(cpu.steps, 100) << sc.name;
   expect_conserved_agree(cpu, gpu, 1e-9, sc.name);
+}
+
+// No allocation inside a step, and few host synchronisations per step
+// (issue #15 item 5): the backend's cudaMalloc calls are the same for a run
+// of 10 steps and one of 40 (all are made while the stepper is set up and
+// in its first step: buffers, the caching allocator's blocks for the sorts
+// and reductions, the octree's room), and the synchronisations per step are
+// those tabled at the top of cuda_stepper.cu - 2 to 4 for these leapfrog
+// scenes, plus one per re-sort (every 16 steps) and per extra
+// smoothing-length attempt; before issue #15 a step took 11 (3-D hydro)
+// and about 30 more with the octree.
+TEST_P(BackendParity, NoAllocationInsideAStep) {
+  if (!gpu_present()) GTEST_SKIP() << "no GPU: " << gpu_description();
+  const auto& sc = GetParam();
+  auto run = [&](int steps, FinalState& fs) {
+    const CudaBackendCounts before = cuda_backend_counts();
+    fs = run_on(sc.make(steps), Backend::Cuda);
+    const CudaBackendCounts after = cuda_backend_counts();
+    return CudaBackendCounts{after.device_allocations - before.device_allocations,
+                             after.host_synchronisations - before.host_synchronisations};
+  };
+  FinalState a, b;
+  const CudaBackendCounts ca = run(10, a), cb = run(40, b);
+  ASSERT_GT(b.steps, a.steps) << sc.name;
+  EXPECT_EQ(ca.device_allocations, cb.device_allocations) << sc.name;
+  const double per_step = double(cb.host_synchronisations - ca.host_synchronisations) / double(b.steps - a.steps);
+  EXPECT_LE(per_step, 6.0) << sc.name;
+  std::printf("%s: %lld device allocations per run; %.2f host synchronisations per step\n", sc.name,
+              static_cast<long long>(cb.device_allocations), per_step);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, BackendParity, ::testing::ValuesIn(rubble::parity::scenes()),
