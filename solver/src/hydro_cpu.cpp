@@ -79,6 +79,9 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     const bool as = m.artificial_stress.enabled && m.shear_modulus > 0;
     p.as_epsilon = as ? Real(m.artificial_stress.epsilon) : Real(0);
     p.as_exponent = as ? Real(m.artificial_stress.n) : Real(0);
+    const bool clumping = m.artificial_stress.form == ArtificialStressForm::Clumping;
+    p.as_clump_onset = clumping ? Real(m.artificial_stress.clump_onset) : Real(0);
+    p.as_clump_full = clumping ? Real(m.artificial_stress.clump_full) : Real(0);
     p.porosity = porosity_params_from_config(m.porosity);
     p.plasticity = plasticity_params_from_config(m.plasticity);
     p.damage = damage_params_from_config(m.damage);

@@ -711,7 +711,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   }
   if (const toml::table* a = table(t, "artificial_stress", p)) {
     const std::string ap = sub(p, "artificial_stress");
-    check_keys(*a, ap, {"enabled", "epsilon", "n"});
+    check_keys(*a, ap, {"enabled", "epsilon", "n", "form", "clump_onset", "clump_full"});
     m.artificial_stress.enabled = true;  // a table turns it on unless enabled = false
     if (auto b = boolean(*a, "enabled", ap)) m.artificial_stress.enabled = *b;
     if (auto x = number(*a, "epsilon", ap)) {
@@ -722,6 +722,25 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
       require(*x > 0 && *x <= 16, *a, "n", ap, *x, "in (0, 16] (typically 4)");
       m.artificial_stress.n = *x;
     }
+    // the form (issue #17 item 3): "clumping" (default) acts only where a
+    // neighbour has come closer than the local spacing; "monaghan" everywhere
+    ArtificialStressConfig& as = m.artificial_stress;
+    as.form = choice(*a, "form", ap, ArtificialStressForm::Clumping,
+                     {{"clumping", ArtificialStressForm::Clumping}, {"monaghan", ArtificialStressForm::Monaghan}});
+    if (as.form == ArtificialStressForm::Monaghan)
+      for (const char* k : {"clump_onset", "clump_full"})
+        if (a->contains(k)) fail(sub(ap, k), "only the \"clumping\" form has this key (form = \"monaghan\" here)");
+    if (auto x = number(*a, "clump_onset", ap)) {
+      require(*x > 0 && *x <= 2, *a, "clump_onset", ap, *x, "in (0, 2] (nearest neighbour / local spacing; default 1)");
+      as.clump_onset = *x;
+    }
+    if (auto x = number(*a, "clump_full", ap)) {
+      require(*x > 0, *a, "clump_full", ap, *x, "> 0");
+      as.clump_full = *x;
+    }
+    if (!(as.clump_full < as.clump_onset))
+      fail(sub(ap, "clump_full"), "clump_full = " + fmt(as.clump_full) + " must be below clump_onset = " +
+                                       fmt(as.clump_onset) + " (the weight ramps from 0 at onset to 1 at full)");
     if (m.artificial_stress.enabled && !(m.shear_modulus > 0))
       fail(ap, "artificial stress acts on solids only; give the material a shear_modulus > 0 or remove it");
   }

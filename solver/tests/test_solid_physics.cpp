@@ -202,6 +202,29 @@ TEST(ArtificialStress, PairFactor) {
   EXPECT_EQ(artificial_stress_factor(0.5, 0.0, 4.0), 0.0);
 }
 
+TEST(ArtificialStress, LocalSpacingIsTheCubicLatticeSpacing) {
+  // m = rho s^D on a cubic lattice of spacing s
+  EXPECT_NEAR(local_spacing<1>(0.3 * 2.0, 2.0), 0.3, 1e-15);
+  EXPECT_NEAR(local_spacing<2>(0.3 * 0.3 * 2.0, 2.0), 0.3, 1e-15);
+  EXPECT_NEAR(local_spacing<3>(0.3 * 0.3 * 0.3 * 2.0, 2.0), 0.3, 1e-15);
+}
+
+TEST(ArtificialStress, ClumpingWeightRampsFromOnsetToFull) {
+  const double s = 0.2, on = 1.0, full = 0.9;
+  // a regular lattice, or one stretched: the nearest neighbour is >= s away
+  EXPECT_EQ(clumping_weight(s, s, on, full), 0.0);
+  EXPECT_EQ(clumping_weight(1.05 * s, s, on, full), 0.0);
+  // clumped: full weight at and below full * s
+  EXPECT_EQ(clumping_weight(0.9 * s, s, on, full), 1.0);
+  EXPECT_EQ(clumping_weight(0.3 * s, s, on, full), 1.0);
+  // linear in between, and continuous at both ends
+  EXPECT_NEAR(clumping_weight(0.95 * s, s, on, full), 0.5, 1e-12);
+  EXPECT_NEAR(clumping_weight((1.0 - 1e-9) * s, s, on, full), 1e-8, 1e-12);
+  EXPECT_NEAR(clumping_weight((0.9 + 1e-9) * s, s, on, full), 1.0 - 1e-8, 1e-12);
+  // onset <= 0 is Monaghan's form: full weight everywhere
+  EXPECT_EQ(clumping_weight(2.0 * s, s, 0.0, 0.0), 1.0);
+}
+
 // On a regular 2-D lattice, the corrected gradient of a linear field is
 // exact, even at a free surface (corner particle), where the uncorrected
 // one is far off.

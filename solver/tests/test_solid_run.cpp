@@ -62,6 +62,23 @@ TEST(SolidScene, KeysAreReadAndValidated) {
   EXPECT_THROW(parse_scene(block_scene("shear_modulus = 0.22", "", "density = \"summation\"\n"), "t.toml"), InputError);
   EXPECT_THROW(parse_scene(block_scene("shear_modulus = -1.0"), "t.toml"), InputError);
   EXPECT_THROW(parse_scene(block_scene("artificial_stress = { epsilon = 0.3 }"), "t.toml"), InputError);  // fluid
+  // the artificial stress's form: clumping by default (issue #17 item 3)
+  const ArtificialStressConfig& as = s.materials[0].artificial_stress;
+  EXPECT_EQ(as.form, ArtificialStressForm::Clumping);
+  EXPECT_EQ(as.clump_onset, 1.0);
+  EXPECT_EQ(as.clump_full, 0.95);
+  const auto as_scene = [](const std::string& table) {
+    return parse_scene(block_scene("shear_modulus = 0.22\nartificial_stress = " + table), "t.toml");
+  };
+  EXPECT_EQ(as_scene("{ form = \"monaghan\" }").materials[0].artificial_stress.form, ArtificialStressForm::Monaghan);
+  const ArtificialStressConfig c = as_scene("{ clump_onset = 0.95, clump_full = 0.8 }").materials[0].artificial_stress;
+  EXPECT_EQ(c.clump_onset, 0.95);
+  EXPECT_EQ(c.clump_full, 0.8);
+  EXPECT_THROW(as_scene("{ form = \"smooth\" }"), InputError);
+  EXPECT_THROW(as_scene("{ form = \"monaghan\", clump_onset = 1.0 }"), InputError);  // not its key
+  EXPECT_THROW(as_scene("{ clump_onset = 0.9, clump_full = 0.95 }"), InputError);      // full above onset
+  EXPECT_THROW(as_scene("{ clump_full = 1.2 }"), InputError);                          // above the default onset
+  EXPECT_THROW(as_scene("{ clump_onset = 0.0 }"), InputError);
   // hydro materials stay hydro, with summation density by default
   const Scene h = parse_scene(block_scene(""), "t.toml");
   EXPECT_EQ(h.materials[0].shear_modulus, 0.0);

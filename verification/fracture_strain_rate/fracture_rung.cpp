@@ -85,8 +85,13 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-// The scene of a bar of length L stretched at eps_dot. The run lasts 1.5
-// times the weakest flaw's time eps_1/eps_dot plus 3 growth times R_s/c_g of
+// The scene of a bar of length L stretched at eps_dot. Artificial stress in
+// Monaghan's form: the "clumping" default (issue #17 item 3) stays off in a
+// uniformly stretched 1-D bar until particles pair up, and then the tensile
+// instability opens the longest bar below its weakest flaw's strength
+// (measured: sigma_f 5.61 MPa at L = 0.4 m against E eps_1 = 6.5 MPa,
+// size slope -0.233), which is not the damage physics this rung measures.
+// The run lasts 1.5 times the weakest flaw's time eps_1/eps_dot plus 3 growth times R_s/c_g of
 // one flaw, with 200 outputs; the step is held to 1/20 of the larger of
 // eps_1 and the strain of one growth time per step (courant).
 std::string bar_scene(double L, double eps_dot, double dx, double& end_time) {
@@ -102,10 +107,10 @@ std::string bar_scene(double L, double eps_dot, double dx, double& end_time) {
   s << "[simulation]\ndimension = 1\nend_time = " << end_time << "\nintegrator = \"leapfrog\"\nhfact = 2.0\n"
     << "density = \"continuity\"\ncourant = " << courant << "\n"
     << "[materials.basalt]\neos = \"murnaghan\"\nmurnaghan = { rho0 = " << kRho0 << ", K0 = " << kK << ", n = 1.0 }\n"
-    << "shear_modulus = " << kMu << "\nartificial_stress = { epsilon = 0.3 }\n"
+    << "shear_modulus = " << kMu << "\nartificial_stress = { epsilon = 0.3, form = \"monaghan\" }\n"
     << "damage = { model = \"grady_kipp\", weibull_k = " << kWeibullK << ", weibull_m = " << kWeibullM << " }\n"
     << "[materials.grip]\neos = \"murnaghan\"\nmurnaghan = { rho0 = " << kRho0 << ", K0 = " << kK << ", n = 1.0 }\n"
-    << "shear_modulus = " << kMu << "\nartificial_stress = { epsilon = 0.3 }\n"
+    << "shear_modulus = " << kMu << "\nartificial_stress = { epsilon = 0.3, form = \"monaghan\" }\n"
     << "[[bodies]]\nshape = \"box\"\nmaterial = \"basalt\"\nmin = [" << -half << "]\nmax = [" << half
     << "]\nspacing = " << dx << "\ndensity = " << kRho0 << "\ninternal_energy = 0.0\nvelocity_gradient = [["
     << eps_dot << "]]\n"

@@ -21,6 +21,8 @@ struct MaterialParams {
   Real shear_modulus;  // mu (0 = no strength)
   Real as_epsilon;     // artificial stress epsilon (0 = off)
   Real as_exponent;    // artificial stress n (0 = off)
+  Real as_clump_onset;  // clumping form: chi > 0 below onset * spacing (0 = Monaghan's form)
+  Real as_clump_full;   // clumping form: chi = 1 below full * spacing
   Real dp;             // initial particle spacing of the material's bodies
   PorosityParams porosity;      // p-alpha (porosity.enabled = false: not porous)
   PlasticityParams plasticity;  // model None: elastic (or fluid)

@@ -8,6 +8,7 @@
 // treats such a pair as absent (its terms are zero), so the two backends
 // see the same pairs. The formulas themselves live in rubble/physics/.
 #include <cstdint>
+#include <limits>
 
 #include "rubble/core/box.hpp"
 #include "rubble/core/hd.hpp"
@@ -397,9 +398,11 @@ template <int D, class Each>
 RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   const StoreView<D>& s = c.s;
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
+  Real r_min = std::numeric_limits<Real>::max();  // nearest neighbour (artificial stress)
   each([&](std::uint32_t b) {
     const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
     const Real r = norm(dx);
+    if (r > Real(0) && r < r_min) r_min = r;
     if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
     const Vec<D> g = Real(0.5) * (kernel_grad<D>(c.kernel, dx, s.h[a]) + kernel_grad<D>(c.kernel, dx, s.h[b]));
     L += velocity_gradient_pair_term<D>(s.m[b], s.rho[b], seen_velocity<D>(s, a, b) - s.v[a], g);
@@ -417,8 +420,11 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
   if (c.art_R) {
     Mat<D> sigma = deviatoric_factor_particle<D>(c, a) * s.S[a];
     for (int i = 0; i < D; ++i) sigma.m[i][i] -= s.p[a];
-    c.art_R[a] = mat.as_exponent > Real(0) ? artificial_stress_tensor<D>(sigma, s.rho[a], mat.as_epsilon)
-                                           : Mat<D>::zero();
+    const Real chi = clumping_weight(r_min, local_spacing<D>(s.m[a], s.rho[a]), mat.as_clump_onset,
+                                     mat.as_clump_full);
+    c.art_R[a] = mat.as_exponent > Real(0) && chi > Real(0)
+                     ? artificial_stress_tensor<D>(sigma, s.rho[a], chi * mat.as_epsilon)
+                     : Mat<D>::zero();
   }
   return well_conditioned;
 }

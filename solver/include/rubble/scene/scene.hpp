@@ -92,10 +92,18 @@ struct EosOptionsConfig {
 
 // Artificial stress against the tensile instability (Monaghan 2000; Gray,
 // Monaghan & Swift 2001); solids only, off by default.
+// The clumping form (default since issue #17 item 3) scales R by a weight
+// that is 0 on a regular lattice and 1 where a neighbour has come closer
+// than clump_full times the local spacing (artificial_stress.hpp).
+enum class ArtificialStressForm { Monaghan, Clumping };
+
 struct ArtificialStressConfig {
   bool enabled = false;
   double epsilon = 0.3;  // R' = -epsilon sigma'/rho^2 for tensile sigma'
   double n = 4;          // exponent of f_ab = W(r)/W(dp)
+  ArtificialStressForm form = ArtificialStressForm::Clumping;
+  double clump_onset = 1.0;  // nearest neighbour / local spacing where it starts
+  double clump_full = 0.95;  // ... and where it acts in full
 };
 
 // p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009); Murnaghan
