@@ -3,6 +3,7 @@
 //
 //   oscillating_plate_rung --scene FILE --records DIR --out DIR --resolutions 5,10,20
 //                          [--label NAME] [--set key=value ...] [--report-only] [--keep] [--v0 V]
+//                          [--finest-tolerance F] [--t-inf-tolerance F]
 //
 // A resolution is the number of particles through the plate's thickness H
 // (dx = H / n). For each one the driver
@@ -28,9 +29,14 @@
 // Checks (issue #4 item 6):
 //   - every run: the period is measured over at least 2 periods (>= 5 zero crossings);
 //   - the period error |T - T_theory| / T_theory falls from each resolution to the next;
-//   - at the finest resolution of the list it is within 10 %.
-// Writes one JSON record per resolution; the convergence and 10 % checks go
-// into the records of the resolutions they judge. --report-only keeps the
+//   - at the finest resolution of the list it is within 10 % (issue #4;
+//     --finest-tolerance sets another bound, e.g. issue #17 item 2's 5 %);
+//   - with --t-inf-tolerance (>= 4 resolutions): the period extrapolated by
+//     T(n) = T_inf (1 + a/n + b/n^2) (plate.hpp) is within that fraction of
+//     the theory (issue #17 item 2: 2 %). No Timoshenko correction is
+//     applied (docs/physics.md estimates it at ~0.6 % for H/L = 0.1).
+// Writes one JSON record per resolution; the convergence and finest-resolution
+// checks go into the records of the resolutions they judge. --report-only keeps the
 // exit status 0 (the checks are still recorded).
 #include <algorithm>
 #include <cmath>
@@ -68,6 +74,8 @@ struct Args {
   bool report_only = false;
   bool keep = false;  // keep the run's output folder (snapshots, conserved.csv)
   double v0 = 0.05;   // initial tip velocity / c_s (issue #4 item 6: 0.05)
+  double finest_tolerance = 0.10;  // issue #4 item 6
+  double t_inf_tolerance = 0;      // 0: no extrapolation check (issue #17 item 2: 0.02)
 };
 
 Args parse_args(int argc, char** argv) {
@@ -86,6 +94,8 @@ Args parse_args(int argc, char** argv) {
     else if (k == "--report-only") a.report_only = true;
     else if (k == "--keep") a.keep = true;
     else if (k == "--v0") a.v0 = std::stod(next());
+    else if (k == "--finest-tolerance") a.finest_tolerance = std::stod(next());
+    else if (k == "--t-inf-tolerance") a.t_inf_tolerance = std::stod(next());
     else if (k == "--resolutions") {
       std::stringstream ss(next());
       std::string item;
@@ -94,6 +104,11 @@ Args parse_args(int argc, char** argv) {
   }
   if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
   rubble::verification::require_increasing_whole(a.resolutions, 1, "particles through the thickness");
+  if (!(a.v0 > 0)) throw std::runtime_error("--v0 must be > 0");
+  if (!(a.finest_tolerance > 0)) throw std::runtime_error("--finest-tolerance must be > 0");
+  if (a.t_inf_tolerance < 0) throw std::runtime_error("--t-inf-tolerance must be >= 0");
+  if (a.t_inf_tolerance > 0 && a.resolutions.size() < 4)
+    throw std::runtime_error("--t-inf-tolerance needs >= 4 resolutions (issue #17 item 2)");
   return a;
 }
 
@@ -351,9 +366,25 @@ int run(const Args& args) {
     if (prev)
       checks.push_back({"period error / period error at H/dx = " + rubble::verification::exact_number(prev->n) + " (must fall)",
                         r.error / prev->error, 1.0, "<=", kSource + ": the period error must fall with resolution"});
-    if (finest)
-      checks.push_back({"|T - T_theory| / T_theory at the finest resolution", r.error, 0.10, "<=",
-                        kSource + ": within 10 % at the finest resolution"});
+    double t_inf_error = NAN;
+    if (finest) {
+      const bool issue4 = args.finest_tolerance == 0.10;
+      checks.push_back({"|T - T_theory| / T_theory at the finest resolution", r.error, args.finest_tolerance, "<=",
+                        issue4 ? kSource + ": within 10 % at the finest resolution"
+                               : std::string("issue #17 item 2: the finest resolution within ") +
+                                     rubble::verification::exact_number(100 * args.finest_tolerance) + " %"});
+      if (args.t_inf_tolerance > 0) {
+        std::vector<double> n, T;
+        for (const Result& q : results) n.push_back(q.n), T.push_back(q.period);
+        const rubble::plate::PeriodLimit fit = rubble::plate::extrapolate_period(n, T);
+        t_inf_error = fit.T_inf / p.period - 1;
+        std::printf("  fit T = T_inf (1 + a/n + b/n^2): T_inf %.5f s, error %+.2f %%, a = %.3f\n", fit.T_inf,
+                    100 * t_inf_error, fit.a);
+        checks.push_back({"|T_inf / T_theory - 1|, T_inf extrapolated by T_inf (1 + a/n + b/n^2)",
+                          std::fabs(t_inf_error), args.t_inf_tolerance, "<=",
+                          "issue #17 item 2: the extrapolated period within 2 % of thin-plate theory"});
+      }
+    }
     for (Check& c : checks)
       if (!std::isfinite(c.value)) c.value = NAN;  // a run that measured no period fails
     std::vector<Json> cj;
@@ -415,6 +446,7 @@ int run(const Args& args) {
                                     {"decay_rate", r.decay_rate},
                                     {"decay_per_period", r.decay_per_period}})},
         {"energy_drift_over_ke0", r.energy_drift},
+        {"t_inf_signed_error", t_inf_error},
         {"tip", Json::object({{"t", r.tip.t}, {"y", r.tip.y}, {"crossings", r.crossings}})},
         {"energy_history", Json::object({{"t", r.et}, {"kinetic", r.ekin}, {"internal", r.eint}, {"total", r.etot}})},
         {"shapes", keep_shapes ? Json::array(r.shapes) : Json::array({})},

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <vector>
 
 #include "rubble/scene/scene.hpp"
 
@@ -64,6 +65,49 @@ inline Plate plate_of(const rubble::Scene& scene) {
   p.omega = std::sqrt(p.E * p.H * p.H * std::pow(k, 4) / (12 * p.rho0 * (1 - p.nu * p.nu)));
   p.period = 2 * std::numbers::pi / p.omega;
   return p;
+}
+
+// The period extrapolated to infinite resolution: least squares of
+// T(n) = T_inf (1 + a/n + b/n^2) over the resolutions n (H/dx), with two
+// resolutions T_inf (1 + a/n) (issue #17 item 2). Shared by both programs.
+struct PeriodLimit {
+  double T_inf = NAN, a = NAN;  // a: the first-order coefficient, relative to T_inf
+  int terms = 0;                // 2 or 3 (NaN fields and 0 with fewer than 2 resolutions)
+};
+
+inline PeriodLimit extrapolate_period(const std::vector<double>& n, const std::vector<double>& T) {
+  PeriodLimit out;
+  if (n.size() != T.size() || n.size() < 2) return out;
+  const int terms = n.size() >= 3 ? 3 : 2;
+  // normal equations M c = r of the basis 1, 1/n, 1/n^2; Gaussian elimination
+  double M[3][4] = {};
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const double basis[3] = {1.0, 1 / n[i], 1 / (n[i] * n[i])};
+    for (int r = 0; r < terms; ++r) {
+      M[r][terms] += basis[r] * T[i];
+      for (int c = 0; c < terms; ++c) M[r][c] += basis[r] * basis[c];
+    }
+  }
+  for (int k = 0; k < terms; ++k) {
+    int piv = k;
+    for (int r = k + 1; r < terms; ++r)
+      if (std::fabs(M[r][k]) > std::fabs(M[piv][k])) piv = r;
+    for (int c = 0; c <= terms; ++c) std::swap(M[k][c], M[piv][c]);
+    for (int r = k + 1; r < terms; ++r) {
+      const double f = M[r][k] / M[k][k];
+      for (int c = k; c <= terms; ++c) M[r][c] -= f * M[k][c];
+    }
+  }
+  double coef[3] = {};
+  for (int k = terms - 1; k >= 0; --k) {
+    double s = M[k][terms];
+    for (int c = k + 1; c < terms; ++c) s -= M[k][c] * coef[c];
+    coef[k] = s / M[k][k];
+  }
+  out.T_inf = coef[0];
+  out.a = coef[1] / coef[0];
+  out.terms = terms;
+  return out;
 }
 
 }  // namespace rubble::plate

@@ -361,21 +361,14 @@ int main(int argc, char** argv) try {
       }
       double e_inf = NAN, a_coef = NAN;
       if (res.size() >= 2) {
-        // least squares of T = T_inf (1 + a/n + b/n^2) (with two resolutions
-        // T_inf (1 + a/n)): the extrapolated period of the operator
-        const std::size_t terms = res.size() >= 3 ? 3 : 2;
-        std::vector<double> M(terms * terms, 0.0), rhs(terms, 0.0);
-        for (std::size_t i = 0; i < res.size(); ++i) {
-          const double n = a.resolutions[i], basis[3] = {1.0, 1 / n, 1 / (n * n)};
-          for (std::size_t r = 0; r < terms; ++r) {
-            rhs[r] += basis[r] * res[i].period;
-            for (std::size_t c = 0; c < terms; ++c) M[r * terms + c] += basis[r] * basis[c];
-          }
-        }
-        const std::vector<double> coef = BandedLu(M, terms, terms - 1, terms - 1).solve(rhs);
-        e_inf = coef[0] / plate.period - 1;
-        a_coef = coef[1] / coef[0];
-        std::printf("  fit T = T_inf (1 + a/n%s): T_inf error %+.2f %%, a = %.3f\n", terms == 3 ? " + b/n^2" : "",
+        // the extrapolated period of the operator (plate.hpp)
+        std::vector<double> periods;
+        for (const ModeResult& m : res) periods.push_back(m.period);
+        const rubble::plate::PeriodLimit fit = rubble::plate::extrapolate_period(
+            std::vector<double>(a.resolutions.begin(), a.resolutions.begin() + res.size()), periods);
+        e_inf = fit.T_inf / plate.period - 1;
+        a_coef = fit.a;
+        std::printf("  fit T = T_inf (1 + a/n%s): T_inf error %+.2f %%, a = %.3f\n", fit.terms == 3 ? " + b/n^2" : "",
                     100 * e_inf, a_coef);
         checks.back().push_back({"T_inf within 2 % of thin-plate theory, " + cfg + ": |T_inf/T_theory - 1|",
                                  std::fabs(e_inf), 0.02, "<=",
