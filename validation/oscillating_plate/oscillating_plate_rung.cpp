@@ -417,6 +417,7 @@ int run(const Args& args) {
                                      {"artificial_stress", mat.artificial_stress.enabled},
                                      {"epsilon", mat.artificial_stress.epsilon},
                                      {"n", mat.artificial_stress.n},
+                                     {"artificial_stress_form", rubble::artificial_stress_form_name(mat.artificial_stress.form)},
                                      {"hfact", base.simulation.hfact},
                                      {"kernel_correction", base.simulation.kernel_correction},
                                      {"xsph", base.simulation.xsph},

@@ -320,7 +320,9 @@ ModeResult bending_mode(const Args& args, double n, double hfact, double eps, bo
 
 int main(int argc, char** argv) try {
   const Args a = parse(argc, argv);
-  const rubble::plate::Plate plate = rubble::plate::plate_of(rubble::load_scene_file(a.scene, a.sets));
+  const rubble::Scene scene = rubble::load_scene_file(a.scene, a.sets);
+  const rubble::plate::Plate plate = rubble::plate::plate_of(scene);
+  const char* as_form = rubble::artificial_stress_form_name(scene.materials[0].artificial_stress.form);
   std::printf("thin-plate theory: T = %.6g s (L = %g m, H = %g m, E = %.6g Pa, nu = %.4f)\n", plate.period, plate.L,
               plate.H, plate.E, plate.nu);
   std::vector<Check> all;
@@ -385,7 +387,9 @@ int main(int argc, char** argv) try {
             {"case", label},
             {"parameters", Json::object({{"method", "linearised right-hand side (plate_operator)"}, {"L", plate.L},
                                          {"H", plate.H}, {"E", plate.E}, {"nu", plate.nu}, {"hfact", hf},
-                                         {"artificial_stress_epsilon", eps}, {"theory_period", plate.period}})},
+                                         {"artificial_stress_epsilon", eps},
+                                         {"artificial_stress_form", eps > 0 ? as_form : "off"},
+                                         {"theory_period", plate.period}})},
             {"resolution", a.resolutions[i]},
             {"resolution_name", "H/dx"},
             {"n_particles", double(m.dofs / 2)},

@@ -230,6 +230,7 @@ int run(const Args& args) {
                                    {"artificial_stress", mat.artificial_stress.enabled},
                                    {"epsilon", mat.artificial_stress.epsilon},
                                    {"n", mat.artificial_stress.n},
+                                   {"artificial_stress_form", rubble::artificial_stress_form_name(mat.artificial_stress.form)},
                                    {"end_time", scene.simulation.end_time},
                                    {"report_only", args.report_only}})},
       {"errors", Json::object({{"energy", Json::object({{"rel", drift}})},

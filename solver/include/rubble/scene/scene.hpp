@@ -96,6 +96,10 @@ struct EosOptionsConfig {
 // that is 0 on a regular lattice and 1 where a neighbour has come closer
 // than clump_full times the local spacing (artificial_stress.hpp).
 enum class ArtificialStressForm { Monaghan, Clumping };
+// The scene's name of a form (for records and messages).
+inline const char* artificial_stress_form_name(ArtificialStressForm f) {
+  return f == ArtificialStressForm::Monaghan ? "monaghan" : "clumping";
+}
 
 struct ArtificialStressConfig {
   bool enabled = false;
