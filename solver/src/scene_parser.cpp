@@ -738,9 +738,10 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
       require(*x > 0, *a, "clump_full", ap, *x, "> 0");
       as.clump_full = *x;
     }
-    if (!(as.clump_full < as.clump_onset))
-      fail(sub(ap, "clump_full"), "clump_full = " + fmt(as.clump_full) + " must be below clump_onset = " +
-                                       fmt(as.clump_onset) + " (the weight ramps from 0 at onset to 1 at full)");
+    if (!(as.clump_full < as.clump_onset))  // blame the key the scene gave (the other may be the default)
+      fail(sub(ap, a->contains("clump_full") ? "clump_full" : "clump_onset"),
+           "clump_full = " + fmt(as.clump_full) + " must be below clump_onset = " + fmt(as.clump_onset) +
+               " (the weight ramps from 0 at onset to 1 at full; defaults 1.0 and 0.95)");
     if (m.artificial_stress.enabled && !(m.shear_modulus > 0))
       fail(ap, "artificial stress acts on solids only; give the material a shear_modulus > 0 or remove it");
   }

@@ -79,6 +79,12 @@ TEST(SolidScene, KeysAreReadAndValidated) {
   EXPECT_THROW(as_scene("{ clump_onset = 0.9, clump_full = 0.95 }"), InputError);      // full above onset
   EXPECT_THROW(as_scene("{ clump_full = 1.2 }"), InputError);                          // above the default onset
   EXPECT_THROW(as_scene("{ clump_onset = 0.0 }"), InputError);
+  try {  // onset below the default full: the message names the key the scene gave
+    as_scene("{ clump_onset = 0.9 }");
+    ADD_FAILURE() << "clump_onset below the default clump_full was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("clump_onset"), std::string::npos) << e.what();
+  }
   // hydro materials stay hydro, with summation density by default
   const Scene h = parse_scene(block_scene(""), "t.toml");
   EXPECT_EQ(h.materials[0].shear_modulus, 0.0);
