@@ -27,7 +27,22 @@
 //   N x (extra steps) / (extra wall time),
 //   i.e. set-up excluded; the rate with set-up included is reported too.
 //   A tiny run of the same case first warms the backend up (thread pool,
-//   device context) so that neither timed run pays for it.
+//   device context, kernel modules) so that neither timed run pays for it.
+//   Device resident: with write_output = false a run writes no snapshot and
+//   no conserved.csv row, so the CUDA backend copies its state to the host
+//   once, at the end (FinalState::device_to_host_bytes); both timed runs pay
+//   that copy, so the difference holds steps only. The case reports the
+//   device-to-host bytes per extra step (0 when the state stays on the
+//   device; a NOTE otherwise) and, on cuda, the host synchronisations per
+//   step (cuda_backend_counts()).
+// Device memory (cuda): the peak of the device's memory in use
+//   (cudaMemGetInfo, sampled every 2 ms by a second host thread while each
+//   timed run lasts) less what was in use before it, divided by N:
+//   device_bytes_per_particle. It counts everything the run holds on the
+//   device (the particle store, the state check's copy, the neighbour grid,
+//   sort and reduction buffers, the octree) in the driver's allocation
+//   granularity (2 MiB), so it means something from about 1e5 particles
+//   up. On cpu: '-' (the state is in host memory; not measured).
 // barnes_hut: a Plummer sphere of N equal masses (G = 1, no softening) and
 //   rubble::Octree with the solver's defaults (quadrupole, leaves of 8,
 //   groups of 32) at --theta; build + walk, best of --repeat; the rate is
@@ -59,6 +74,15 @@
 
 #ifdef _OPENMP
 #include <omp.h>
+#endif
+
+#ifdef RUBBLE_HAVE_CUDA
+#include <cuda_runtime.h>
+
+#include <atomic>
+#include <thread>
+
+#include "../solver/src/cuda/cuda_stepper.hpp"  // cuda_backend_counts()
 #endif
 
 #include "../verification/common/record.hpp"
@@ -238,7 +262,98 @@ struct Result {
     text.emplace_back(k, std::to_string(v));
     json.emplace_back(k, Json(v));
   }
+  void add_none(const std::string& k) {  // not measured: '-' on the RESULT line, null in the JSON
+    text.emplace_back(k, "-");
+    json.emplace_back(k, Json());
+  }
 };
+
+// The device memory a run holds at its peak, in bytes (see the header):
+// started before the run, stop() after it. -1 where not measured (cpu
+// backend, a CPU-only build, no device), 0 when no sample saw the run's
+// memory (a run shorter than the sampling interval).
+class DeviceMemoryWatch {
+ public:
+  explicit DeviceMemoryWatch(rubble::Backend backend) {
+#ifdef RUBBLE_HAVE_CUDA
+    if (backend != rubble::Backend::Cuda) return;
+    baseline_ = used();
+    if (baseline_ < 0) return;
+    peak_.store(baseline_);
+    thread_ = std::thread([this] {
+      while (!stop_.load()) {
+        sample();
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+    });
+#else
+    (void)backend;
+#endif
+  }
+  ~DeviceMemoryWatch() { stop(); }
+  DeviceMemoryWatch(const DeviceMemoryWatch&) = delete;
+  DeviceMemoryWatch& operator=(const DeviceMemoryWatch&) = delete;
+
+  std::int64_t stop() {
+#ifdef RUBBLE_HAVE_CUDA
+    if (thread_.joinable()) {
+      stop_.store(true);
+      thread_.join();
+    }
+    if (baseline_ < 0) return -1;
+    return std::max<std::int64_t>(0, peak_.load() - baseline_);
+#else
+    return -1;
+#endif
+  }
+
+ private:
+#ifdef RUBBLE_HAVE_CUDA
+  // the device's memory in use (all processes), -1 if it cannot be asked
+  static std::int64_t used() {
+    std::size_t free_b = 0, total_b = 0;
+    if (cudaMemGetInfo(&free_b, &total_b) != cudaSuccess) {
+      cudaGetLastError();  // clear it: the run reports its own errors
+      return -1;
+    }
+    return std::int64_t(total_b - free_b);
+  }
+  void sample() {
+    const std::int64_t u = used();
+    std::int64_t p = peak_.load();
+    while (u > p && !peak_.compare_exchange_weak(p, u)) {
+    }
+  }
+  std::int64_t baseline_ = -1;
+  std::atomic<std::int64_t> peak_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+#endif
+};
+
+// Host synchronisations of the CUDA backend so far (0 on cpu).
+std::int64_t host_synchronisations() {
+#ifdef RUBBLE_HAVE_CUDA
+  return rubble::cuda_backend_counts().host_synchronisations;
+#else
+  return 0;
+#endif
+}
+
+// The device-memory fields of a case: bytes in all, and per particle.
+void add_device_memory(Result& r, std::int64_t bytes, double n, rubble::Backend backend) {
+  if (bytes > 0) {
+    r.add("device_bytes", (long long)bytes);
+    r.add("device_bytes_per_particle", double(bytes) / n, "%.4g");
+  } else {
+    r.add_none("device_bytes");
+    r.add_none("device_bytes_per_particle");
+    std::printf("NOTE: device memory not measured: %s\n",
+                backend != rubble::Backend::Cuda ? "the cpu backend keeps the state in host memory"
+                : bytes == 0 ? "no sample saw the run's memory (too short a run)"
+                             : "cudaMemGetInfo failed");
+  }
+}
 
 // ---- time-stepped cases (hydro3d, rings) --------------------------------------
 
@@ -284,21 +399,28 @@ double initial_courant_dt(const rubble::Scene& scene) {
 struct Timed {
   double wall = 0;
   long long steps = 0, particle_evaluations = 0, n = 0;
+  long long device_to_host_bytes = 0, host_synchronisations = 0;
+  std::int64_t device_bytes = -1;  // DeviceMemoryWatch
   std::string backend;
 };
 
 Timed timed_run(const rubble::Scene& scene, rubble::Backend backend) {
   rubble::RunOptions opt;
   opt.backend = backend;
-  opt.write_output = false;
+  opt.write_output = false;  // no snapshot, no conserved.csv: nothing leaves the device until the end
   opt.quiet = true;
+  const std::int64_t syncs0 = host_synchronisations();
+  DeviceMemoryWatch memory(backend);
   const auto t0 = std::chrono::steady_clock::now();
   const rubble::FinalState fs = rubble::run_scene(scene, opt);
   Timed r;
   r.wall = seconds_since(t0);
+  r.device_bytes = memory.stop();
+  r.host_synchronisations = host_synchronisations() - syncs0;
   r.steps = fs.steps;
   r.particle_evaluations = fs.particle_evaluations;
   r.n = (long long)fs.m.size();
+  r.device_to_host_bytes = fs.device_to_host_bytes;
   r.backend = fs.backend;
   return r;
 }
@@ -320,9 +442,11 @@ void measure_steps(const Load& load, const Load& load_tiny, long steps, int repe
   timed_run(scene_until(load_tiny, dt), backend);  // warm-up, not timed
   const rubble::Scene short_scene = scene_until(load, 0.5 * dt), long_scene = scene_until(load, double(steps) * dt);
   Timed one, many;
+  std::int64_t device_bytes = -1;
   for (int rep = 0; rep < repeat; ++rep) {
     Timed a = timed_run(short_scene, backend);
     Timed b = timed_run(long_scene, backend);
+    device_bytes = std::max({device_bytes, a.device_bytes, b.device_bytes});
     if (rep == 0 || a.wall < one.wall) one = std::move(a);
     if (rep == 0 || b.wall < many.wall) many = std::move(b);
   }
@@ -345,6 +469,18 @@ void measure_steps(const Load& load, const Load& load_tiny, long steps, int repe
   r.add("rate", n / step_s, "%.4g");
   r.add("rate_with_setup", n * double(many.steps) / many.wall, "%.4g");
   r.add("rate_unit", "particle_steps_per_s");
+  // Device resident: the long run's extra steps copied nothing to the host
+  // (both runs download the final state once).
+  const double d2h_per_step = double(many.device_to_host_bytes - one.device_to_host_bytes) / double(extra_steps);
+  r.add("d2h_bytes_per_step", d2h_per_step, "%.4g");
+  r.add("d2h_bytes_final_state", many.device_to_host_bytes);
+  if (backend == rubble::Backend::Cuda)
+    r.add("host_syncs_per_step",
+          double(many.host_synchronisations - one.host_synchronisations) / double(extra_steps), "%.3g");
+  add_device_memory(r, device_bytes, n, backend);
+  if (d2h_per_step != 0)
+    std::printf("NOTE: %.4g bytes per step copied from the device to the host: the steps were not device resident\n",
+                d2h_per_step);
   if (!std::isfinite(step_s))
     std::printf("NOTE: the %lld-step run was not slower than the short one (too short to time): no rate\n",
                 many.steps);
@@ -439,10 +575,17 @@ void run_barnes_hut_device(const CaseArgs& c, Result& r) {
   g.theta = c.theta;
   double best_build = 1e300, best_walk = 1e300;
   std::uint32_t nodes = 0;
+  // warm-up (device context, kernel modules), not timed: a small tree
+  const std::size_t n_warm = std::min<std::size_t>(n, 4096);
+  rubble::cuda_barnes_hut_field(x.data(), m.data(), nullptr, n_warm, g, rubble::KernelType::CubicSpline, acc.data(),
+                                nullptr);
+  std::int64_t device_bytes = -1;
   for (int rep = 0; rep < c.repeat; ++rep) {
+    DeviceMemoryWatch memory(rubble::Backend::Cuda);
     const rubble::DeviceGravityTiming t =
         rubble::cuda_barnes_hut_field(x.data(), m.data(), nullptr, n, g, rubble::KernelType::CubicSpline, acc.data(),
                                       nullptr);
+    device_bytes = std::max(device_bytes, memory.stop());
     best_build = std::min(best_build, t.build_seconds);
     best_walk = std::min(best_walk, t.walk_seconds);
     nodes = t.nodes;
@@ -462,6 +605,7 @@ void run_barnes_hut_device(const CaseArgs& c, Result& r) {
   r.add("walk_s", best_walk, "%.4g");
   r.add("rate", double(n) / (best_build + best_walk), "%.4g");
   r.add("rate_unit", "particles_per_s");
+  add_device_memory(r, device_bytes, double(n), rubble::Backend::Cuda);
 }
 
 void run_barnes_hut(const CaseArgs& c, rubble::Backend backend, Result& r) {
@@ -507,6 +651,7 @@ void run_barnes_hut(const CaseArgs& c, rubble::Backend backend, Result& r) {
   r.add("walk_s", best_walk, "%.4g");
   r.add("rate", double(n) / (best_build + best_walk), "%.4g");
   r.add("rate_unit", "particles_per_s");
+  add_device_memory(r, -1, double(n), backend);
 }
 
 std::string result_line(const Result& r) {
