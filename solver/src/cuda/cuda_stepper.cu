@@ -9,12 +9,23 @@
 //                    uses CUB's radix sort for integer keys), and a gather of
 //                    every allocated field: the same permutation as the CPU's
 //                    spatial_sort_permutation.
-//   neighbours       a uniform grid whose cells are at least the largest
-//                    search radius wide; (cell, index) pairs radix-sorted on
-//                    the device, a start/end range per cell, and a visitor
-//                    (GridNeighbors) that offers every particle of the 3^D
-//                    surrounding cells to the loop body, which keeps those
-//                    within max(R_a, R_b) - the CPU cell list's criterion.
+//   neighbours       a uniform grid of cells max(r_typ / 2, r_max / 4) wide
+//                    (r_typ the geometric mean of the search radii; cells
+//                    hashed into at most 2n slots when the particles' extent
+//                    holds more, e.g. a far outlier); (slot, index) pairs
+//                    radix-sorted on the device, per slot a start/end range,
+//                    the largest R of its particles and the largest R of any
+//                    ball touching it (atomic maxima), and a visitor
+//                    (GridNeighbors) that inspects the cells within
+//                    max(R_a, that reach) and offers the particles of those
+//                    within max(R_a, cell's R max) to the loop body, which
+//                    keeps those within max(R_a, R_b) - the CPU cell list's
+//                    criterion. See uniform_grid.hpp (why, and the test
+//                    against the CPU cell list). Summation density gathers
+//                    each particle's candidates within its own radius once
+//                    into a list in thread-local memory and reuses it over
+//                    its smoothing-length Newton iterations
+//                    (candidate_list.hpp).
 //   right-hand side  one kernel per loop body of rubble/drivers/particle_rates.hpp.
 //   integrators      the per-particle steps of leapfrog.hpp and rk2_adaptive.hpp.
 //   reductions       time-step limit, conserved sums, finiteness, counts:
@@ -88,6 +99,7 @@
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_sums.hpp"
+#include "rubble/neighbors/candidate_list.hpp"
 #include "rubble/neighbors/morton.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
 #include "rubble/neighbors/uniform_grid.hpp"
@@ -227,12 +239,26 @@ void sort_pairs(CachingDeviceAllocator& alloc, K* keys, V* values, std::size_t n
   if (cuda::sync_check_enabled()) cuda::check(cudaDeviceSynchronize(), what, __FILE__, __LINE__);
 }
 
+// Atomic maximum of a non-negative Real (a search radius) in device memory:
+// the bit patterns of non-negative IEEE numbers order as unsigned integers.
+// The read first skips the atomic where a larger value is already there
+// (values only grow during a kernel, from the zeros written before it).
+__device__ inline void atomic_max_positive(Real* p, Real v) {
+  if (*p >= v) return;
+  if constexpr (sizeof(Real) == 8) {
+    atomicMax(reinterpret_cast<unsigned long long*>(p), static_cast<unsigned long long>(__double_as_longlong(double(v))));
+  } else {
+    atomicMax(reinterpret_cast<unsigned int*>(p), __float_as_uint(float(v)));
+  }
+}
+
 // The particles' extent on every axis and, where R is given, their largest
 // search radius: one reduction where the grid needs all three.
 template <int D>
 struct Extent {
   Vec<D> lo, hi;
   Real r_max;
+  double log_r_sum;  // sum of log R: the grid's typical radius (geometric mean)
 };
 
 // thrust::minimum's and thrust::maximum's rules, per component.
@@ -245,6 +271,7 @@ struct ExtentUnion {
       r.hi[k] = a.hi[k] < b.hi[k] ? b.hi[k] : a.hi[k];
     }
     r.r_max = a.r_max < b.r_max ? b.r_max : a.r_max;
+    r.log_r_sum = a.log_r_sum + b.log_r_sum;
     return r;
   }
 };
@@ -257,6 +284,7 @@ Extent<D> extent_of(CachingDeviceAllocator& alloc, const Vec<D>* x, const Real* 
     init.hi[k] = std::numeric_limits<Real>::lowest();
   }
   init.r_max = Real(0);
+  init.log_r_sum = 0;
   return reduce_index<Extent<D>>(
       alloc, n,
       [=] __device__(std::size_t i) {
@@ -264,6 +292,7 @@ Extent<D> extent_of(CachingDeviceAllocator& alloc, const Vec<D>* x, const Real* 
         e.lo = x[i];
         e.hi = x[i];
         e.r_max = R ? R[i] : Real(0);
+        e.log_r_sum = R ? ::log(double(R[i])) : 0.0;
         return e;
       },
       init, ExtentUnion<D>());
@@ -710,6 +739,7 @@ struct CudaStepper<D>::Impl {
   // grid cell list
   DeviceArray<std::uint64_t> keys;
   DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
+  DeviceArray<Real> cell_rmax, cell_reach;  // per slot: largest R of its particles, of a ball touching it
   GridNeighbors<D> grid{};
   Extent<D> grid_extent{};  // the positions' extent when the grid was built (Barnes-Hut reuses it)
   // integrator scratch
@@ -819,8 +849,9 @@ struct CudaStepper<D>::Impl {
     host_current = false;
   }
 
-  // The grid cell list for search radii R (device array of n). One host
-  // synchronisation: the extent and the largest radius, one reduction.
+  // The grid cell list for search radii R (device array of n), see
+  // uniform_grid.hpp. One host synchronisation: the extent, the largest
+  // radius and the sum of log R, one reduction.
   void build_grid(const Real* R) {
     const std::size_t count = n();
     const Extent<D> ext = extent_of<D>(temp, store.view().x, R, count);
@@ -829,21 +860,27 @@ struct CudaStepper<D>::Impl {
     for (int k = 0; k < D; ++k)
       if (!std::isfinite(ext.lo[k]) || !std::isfinite(ext.hi[k])) throw RunError("non-finite particle position");
     grid_extent = ext;
+    const Real r_typ = Real(std::exp(ext.log_r_sum / double(count)));
     GridNeighbors<D> g{};
     try {
-      g.grid = make_uniform_grid<D>(domain, ext.lo, ext.hi, r_max, std::max(64.0, 4.0 * double(count)));
+      // at most 2n slots (start, end, two radii: 24 bytes each in double)
+      g.grid = make_uniform_grid<D>(domain, ext.lo, ext.hi, r_typ, r_max, std::max(64.0, 2.0 * double(count)));
     } catch (const std::invalid_argument& e) {
       throw RunError(e.what());
     }
-    const std::size_t cells = g.grid.cell_count();
+    const std::size_t slots = std::size_t(g.grid.cell_count());
     // grown with a quarter to spare, so that a grid a few cells larger later
     // in the run needs no new allocation
-    if (cells > cell_start.n) {
-      cell_start.resize(cells + cells / 4);
-      cell_end.resize(cells + cells / 4);
+    if (slots > cell_start.n) {
+      cell_start.resize(slots + slots / 4);
+      cell_end.resize(slots + slots / 4);
+      cell_rmax.resize(slots + slots / 4);
+      cell_reach.resize(slots + slots / 4);
     }
-    RUBBLE_CUDA(cudaMemset(cell_start.data(), 0, cells * sizeof(std::uint32_t)));
-    RUBBLE_CUDA(cudaMemset(cell_end.data(), 0, cells * sizeof(std::uint32_t)));
+    RUBBLE_CUDA(cudaMemsetAsync(cell_start.data(), 0, slots * sizeof(std::uint32_t)));
+    RUBBLE_CUDA(cudaMemsetAsync(cell_end.data(), 0, slots * sizeof(std::uint32_t)));
+    RUBBLE_CUDA(cudaMemsetAsync(cell_rmax.data(), 0, slots * sizeof(Real)));  // 0.0: all bits zero
+    RUBBLE_CUDA(cudaMemsetAsync(cell_reach.data(), 0, slots * sizeof(Real)));
 
     const StoreView<D> s = store.view();
     g.x = s.x;
@@ -851,12 +888,20 @@ struct CudaStepper<D>::Impl {
     g.order = order.data();
     g.start = cell_start.data();
     g.end = cell_end.data();
+    g.cell_rmax = cell_rmax.data();
+    g.cell_reach = cell_reach.data();
     std::uint64_t* cell = keys.data();
     std::uint32_t* ord = order.data();
-    const GridNeighbors<D> gg = g;
-    for_each_index("cell ids", count, [=] __device__(std::size_t i) {
-      cell[i] = gg.grid.cell_of(gg.x[i]);
+    Real* rmax = cell_rmax.data();
+    Real* reach = cell_reach.data();
+    const UniformGrid<D> geo = g.grid;
+    const Vec<D>* x = s.x;
+    for_each_index("cell ids and reach", count, [=] __device__(std::size_t i) {
+      const std::uint64_t slot = geo.bucket_of(x[i]);
+      cell[i] = slot;
       ord[i] = std::uint32_t(i);
+      atomic_max_positive(rmax + slot, R[i]);
+      stamp_reach<D>(geo, x[i], R[i], [=](std::uint64_t t, Real r) { atomic_max_positive(reach + t, r); });
     });
     sort_pairs(temp, cell, ord, count, "thrust::sort_by_key (cells)");
     std::uint32_t* st = cell_start.data();
@@ -884,13 +929,23 @@ struct CudaStepper<D>::Impl {
         GridNeighbors<D> each = g;
         each.a = std::uint32_t(i);
         // R is read by every thread's neighbour walk: grown radii are
-        // written only after this kernel (below), not here
-        flag[i] = summation_density_particle<D>(c, std::uint32_t(i), R[i], each) ? 0 : 1;
+        // written only after this kernel (below), not here.
+        // The Newton iterations on h (h <= R[i] throughout) need only the
+        // particles within R[i]: gathered once into a list in this
+        // thread's local memory and offered again on every iteration; a
+        // particle with more than the list holds walks the grid each time
+        // (the same particles in the same order: the same result).
+        const GridOwnRadius<D> own{each};
+        CandidateList<kCandidateListCapacity<D>> list;
+        const bool ok = list.gather(own) ? summation_density_particle<D>(c, std::uint32_t(i), R[i], list)
+                                         : summation_density_particle<D>(c, std::uint32_t(i), R[i], own);
+        flag[i] = ok ? 0 : 1;
       });
       // one host synchronisation per attempt (the host decides whether to
       // rebuild); one attempt in a step where no h outgrew its radius
-      const int outgrown = reduce_index<int>(temp, count, [=] __device__(std::size_t i) { return flag[i]; }, 0,
-                                             thrust::plus<int>());
+      const unsigned long long outgrown = reduce_index<unsigned long long>(
+          temp, count, [=] __device__(std::size_t i) { return (unsigned long long)flag[i]; }, 0ull,
+          thrust::plus<unsigned long long>());
       if (outgrown == 0) return;
       for_each_index("grown search radius", count, [=] __device__(std::size_t i) {
         if (flag[i]) R[i] = kSkin * c.s.h[i];
