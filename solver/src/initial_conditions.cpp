@@ -447,6 +447,7 @@ FieldNeeds field_needs(const Scene& scene) {
     needs.free_slip = needs.free_slip || b.wall_free_slip;
   }
   needs.xsph = sim.xsph > 0;
+  needs.kernel_correction = needs.solid && sim.kernel_correction;
   for (const MaterialConfig& m : scene.materials) {
     needs.porosity = needs.porosity || m.porosity.enabled;
     needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;

@@ -393,6 +393,9 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
 
 // Pass 1: the velocity gradient L_a (with the kernel-gradient correction
 // when on), the Jaumann stress rate dS/dt and the artificial stress R_a.
+// With the correction it also stores K_a = C_a^T, with which pass 2 turns
+// gbar into the corrected gradient of a's stress terms (solid.hpp), so that
+// Hooke's law, continuity and the energy equation share one strain rate.
 // Returns false when the correction matrix was ill-conditioned (identity used).
 template <int D, class Each>
 RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
@@ -405,14 +408,17 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
     if (r > Real(0) && r < r_min) r_min = r;
     if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
     const Vec<D> g = Real(0.5) * (kernel_grad<D>(c.kernel, dx, s.h[a]) + kernel_grad<D>(c.kernel, dx, s.h[b]));
-    L += velocity_gradient_pair_term<D>(s.m[b], s.rho[b], seen_velocity<D>(s, a, b) - s.v[a], g);
-    if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], s.rho[b], -dx, g);
+    // volume weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp)
+    const Real rho_w = c.kernel_correction ? s.rho[a] : s.rho[b];
+    L += velocity_gradient_pair_term<D>(s.m[b], rho_w, seen_velocity<D>(s, a, b) - s.v[a], g);
+    if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], rho_w, -dx, g);
   });
   bool well_conditioned = true;
   if (c.kernel_correction) {
     Mat<D> C;
     well_conditioned = correction_matrix<D>(M, kCorrectionMinDet, C);
-    L = L * C;  // M is symmetric for radial kernels, so C^T = C
+    L = L * C;  // = sum_b V_b v_ba (x) (C^T gbar)
+    if (s.corr_K) s.corr_K[a] = transpose(C);
   }
   const MaterialParams& mat = c.mat[s.material_id[a]];
   s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
@@ -436,7 +442,7 @@ RUBBLE_HD_INLINE SolidParticle<D> solid_particle(const RhsContext<D>& c, std::ui
   const Mat<D> S = (s.alpha || s.damage_root) ? deviatoric_factor_particle<D>(c, i) * s.S[i] : s.S[i];
   return SolidParticle<D>{s.x[i],  s.v[i],  s.m[i], s.rho[i], s.p[i], s.h[i], s.cs[i], S,
                           c.art_R ? c.art_R[i] : Mat<D>::zero(), mat.av, mat.dp, mat.as_exponent,
-                          s.u[i], mat.alpha_u};
+                          s.u[i], mat.alpha_u, s.corr_K ? &s.corr_K[i] : nullptr};
 }
 
 // Pass 2: the full-stress momentum, energy and continuity equations.
@@ -527,12 +533,16 @@ RUBBLE_HD_INLINE void shifting_particle(const RhsContext<D>& c, std::uint32_t a,
 }
 
 // Largest stable step of particle a (Courant and force limits); solids use
-// the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho)).
+// the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho)). With the
+// kernel-gradient correction h is divided by the correction's gain
+// (kernel_gradient_correction.hpp: correction_gain), the factor by which the
+// corrected stress terms stiffen a truncated kernel.
 template <int D>
 RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  const Real hM = monaghan_h<D>(c.kernel, s.h[a]);
+  Real hM = monaghan_h<D>(c.kernel, s.h[a]);
+  if (s.corr_K) hM /= correction_gain<D>(s.corr_K[a]);
   const Real cl = mat.shear_modulus > Real(0) ? elastic_signal_speed(s.cs[a], mat.shear_modulus, s.rho[a]) : s.cs[a];
   const Real dt_c = courant_dt(c.courant, hM, cl, mat.av.alpha, mat.av.beta, s.mu_max[a]);
   const Real dt_f = force_dt(c.force_factor, hM, norm(s.dvdt[a]));

@@ -47,6 +47,8 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     if (scene.simulation.density == DensityForm::Summation || ps.S.size() != ps.n || ps.dSdt.size() != ps.n)
       throw RunError("solids need continuity density with the S and dSdt fields allocated");
     f.kernel_correction = scene.simulation.kernel_correction;
+    if (f.kernel_correction && ps.corr_K.size() != ps.n)
+      throw RunError("the kernel-gradient correction needs the corr_K field allocated");
   }
   if (scene.simulation.xsph > 0 && ps.xsph_v.size() != ps.n) throw RunError("XSPH needs the xsph_v field allocated");
   return f;

@@ -30,6 +30,7 @@ struct FieldNeeds {
   bool solid = false;               // a material has strength: S and dSdt are stored
   bool boundary = false;            // a body is made of boundary particles
   bool xsph = false;                // XSPH: the position-rate correction is stored
+  bool kernel_correction = false;   // solids with simulation.kernel_correction: K = C^T is stored
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
   bool free_slip = false;           // a wall is free-slip: wall_normal is stored
@@ -78,6 +79,13 @@ struct ParticleStore {
 
   // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
   std::vector<Vec<D>> xsph_v;  // [m/s]
+
+  // kernel-gradient correction (allocated only for solids with
+  // simulation.kernel_correction): K = C^T of each particle, set by the
+  // velocity-gradient pass and read by the pair pass and the time-step
+  // limit (drivers/particle_rates.hpp, physics/solid.hpp); a store field so
+  // that a sort carries it with its particle
+  std::vector<Mat<D>> corr_K;  // [1]
 
   // p-alpha porosity (allocated only when a material is porous): the
   // distention alpha = rho_matrix / rho >= 1 (1 for particles of non-porous
@@ -170,6 +178,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"dSdt", &PS::dSdt, "Pa/s", FieldRole::Rate, false},
       {"boundary", &PS::boundary, "1", FieldRole::Constant, true},
       {"xsph_v", &PS::xsph_v, "m/s", FieldRole::Derived, false},
+      {"corr_K", &PS::corr_K, "1", FieldRole::Derived, false},
       {"alpha", &PS::alpha, "1", FieldRole::Evolved, true},
       {"dalphadt", &PS::dalphadt, "1/s", FieldRole::Rate, false},
       {"eps_p", &PS::eps_p, "1", FieldRole::Evolved, true},
@@ -217,6 +226,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   }
   if (needs.boundary) boundary.assign(n, 0);
   if (needs.xsph) xsph_v.assign(n, Vec<D>::zero());
+  if (needs.kernel_correction) corr_K.assign(n, Mat<D>::identity());
   if (needs.porosity) {
     alpha.assign(n, 1);
     dalphadt.assign(n, 0);

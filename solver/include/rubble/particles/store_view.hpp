@@ -50,6 +50,7 @@ struct StoreView {
   Mat<D>* dSdt = nullptr;
   std::int32_t* boundary = nullptr;
   Vec<D>* xsph_v = nullptr;
+  Mat<D>* corr_K = nullptr;
   Real* alpha = nullptr;
   Real* dalphadt = nullptr;
   Real* eps_p = nullptr;
@@ -80,6 +81,7 @@ struct StoreView {
     set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
     set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
+    set(corr_K, "corr_K");
     set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p"), set(eps_v, "eps_v");
     set(wall_normal, "wall_normal");
     set(damage_root, "damage_root"), set(ddamage_root_dt, "ddamage_root_dt"), set(flaw_count, "flaw_count");

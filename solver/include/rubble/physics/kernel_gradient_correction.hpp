@@ -38,4 +38,25 @@ RUBBLE_HD_INLINE bool correction_matrix(const Mat<D>& sum, Real min_det, Mat<D>&
   return true;
 }
 
+// How much the correction can lengthen a kernel gradient: max(1, ||K||_inf),
+// the largest absolute row sum of K = C^T (an upper bound of its spectral
+// norm). Where the kernel is truncated - a free surface, an edge, a corner -
+// C_a is about the inverse of the kernel's missing share, ~2 on a face and
+// ~4 at a corner in 2-D, and the corrected stress terms (solid.hpp) are
+// that much stiffer, so the particle's highest frequency rises by the same
+// factor: the time step divides h by it (dt_limit_particle). Measured: a 2-D
+// basalt block with corrected momentum and energy equations ran away at
+// Courant 0.3 with the uncorrected limit and is stable with this one
+// (solver/tests/test_solid_run.cpp, ElasticEnergyBudget...).
+template <int D>
+RUBBLE_HD_INLINE Real correction_gain(const Mat<D>& K) {
+  Real g = 1;
+  for (int i = 0; i < D; ++i) {
+    Real row = 0;
+    for (int j = 0; j < D; ++j) row += std::fabs(K.m[i][j]);
+    g = row > g ? row : g;
+  }
+  return g;
+}
+
 }  // namespace rubble

@@ -18,6 +18,25 @@
 // L_a = sum_b (m_b/rho_a)(v_b - v_a) (x) gbar, is the SPH form of the shear
 // heating (1/rho) S : eps_dot (jaumann_rate.hpp: shear_heating). With S = 0
 // and no artificial stress this is hydro_pair's continuity-density form.
+//
+// Kernel-gradient correction (simulation.kernel_correction; issue #17
+// item 4): every stress term uses the corrected gradient of its own
+// particle, G_ab = K_a gbar with K_a = C_a^T (kernel_gradient_correction.hpp),
+//   dv_a/dt   = sum_b m_b [ sigma_a/rho_a^2 K_a + sigma_b/rho_b^2 K_b ] gbar + (viscosity, R)
+//   du_a/dt   = - sum_b m_b (sigma_a/rho_a^2) : (v_ab (x) K_a gbar) - (viscosity, R)/2
+//   drho_a/dt =   sum_b m_b v_ab . K_a gbar            = -rho_a tr(L_a)
+// with L_a = sum_b (m_b/rho_a) v_ba (x) K_a gbar the velocity gradient that
+// evolves S (solid_gradient_particle), so du_a/dt = sigma_a : L_a / rho_a
+// and drho/dt = -rho tr(L) use the very strain rate of Hooke's law. The
+// momentum equation is the one whose work is that du/dt (sum over a of
+// m_a v_a . dv_a/dt + m_a du_a/dt = 0 pair by pair), so energy and linear
+// momentum stay conserved. Angular momentum too (Bonet & Lok 1999,
+// Comput. Methods Appl. Mech. Engrg. 180:97): L_a is exact for a linear
+// velocity field, so a rigid rotation (L = W skew) does no work against a
+// symmetric sigma, and forces that do no work in every rigid rotation
+// exert no net torque. (Only where C_a fell back to the identity is any of
+// this approximate.) Viscosity and artificial stress keep the uncorrected,
+// antisymmetric gbar.
 #include <cmath>
 
 #include "rubble/core/hd.hpp"
@@ -41,6 +60,9 @@ struct SolidParticle {
   Real as_exponent;   // n of the artificial stress (0 = off)
   Real u = 0;         // specific internal energy (artificial conductivity)
   Real alpha_u = 0;   // conductivity coefficient of its material (0 = off)
+  // kernel-gradient correction K = C^T of the particle (nullptr = off):
+  // its stress terms act along K gbar
+  const Mat<D>* K = nullptr;
 };
 
 template <int D>
@@ -90,11 +112,19 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
     shared += fn * (a.R + b.R);
   }
 
-  out.dvdt = b.m * ((sa + sb + shared) * g);
-  // -(sigma_a/rho_a^2 + shared/2) : (v_ab (x) g)
-  const Mat<D> work = sa + Real(0.5) * shared;
-  out.dudt = -b.m * double_dot(work, Mat<D>::outer(dv, g));
-  out.drhodt = b.m * dot(dv, g);
+  if (a.K || b.K) {  // kernel-gradient correction: each stress along its own K gbar
+    const Vec<D> ga = a.K ? (*a.K) * g : g;
+    const Vec<D> gb = b.K ? (*b.K) * g : g;
+    out.dvdt = b.m * (sa * ga + sb * gb + shared * g);
+    out.dudt = -b.m * (double_dot(sa, Mat<D>::outer(dv, ga)) + Real(0.5) * double_dot(shared, Mat<D>::outer(dv, g)));
+    out.drhodt = b.m * dot(dv, ga);
+  } else {
+    out.dvdt = b.m * ((sa + sb + shared) * g);
+    // -(sigma_a/rho_a^2 + shared/2) : (v_ab (x) g)
+    const Mat<D> work = sa + Real(0.5) * shared;
+    out.dudt = -b.m * double_dot(work, Mat<D>::outer(dv, g));
+    out.drhodt = b.m * dot(dv, g);
+  }
   out.mu = -mu;
 
   // Artificial conductivity (Price 2008), as in hydro_pair: the fluid of a
@@ -116,11 +146,15 @@ RUBBLE_HD_INLINE Real elastic_signal_speed(Real cs, Real shear_modulus, Real rho
 }
 
 // One neighbour's contribution to the velocity gradient of a:
-// L_a += (m_b/rho_b) (v_b - v_a) (x) grad_a W_ab (PHYSICS.md §1); the
-// kernel-gradient correction multiplies the sum from the right by C_a.
+// L_a += (m_b/rho) (v_b - v_a) (x) grad_a W_ab (PHYSICS.md §1), rho = rho_b
+// (the volume V_b = m_b/rho_b) without correction. With the kernel-gradient
+// correction rho = rho_a, the weight of the energy and continuity equations
+// above, and the sum is multiplied from the right by C_a (computed with the
+// same weight, so L_a is exact for linear fields and -rho_a tr(L_a) is the
+// corrected continuity rate).
 template <int D>
-RUBBLE_HD_INLINE Mat<D> velocity_gradient_pair_term(Real m_b, Real rho_b, const Vec<D>& v_ba, const Vec<D>& grad_a_w) {
-  return (m_b / rho_b) * Mat<D>::outer(v_ba, grad_a_w);
+RUBBLE_HD_INLINE Mat<D> velocity_gradient_pair_term(Real m_b, Real rho, const Vec<D>& v_ba, const Vec<D>& grad_a_w) {
+  return (m_b / rho) * Mat<D>::outer(v_ba, grad_a_w);
 }
 
 }  // namespace rubble
