@@ -34,14 +34,21 @@ std::string block_scene(const std::string& material_extra, const std::string& ex
          extra_bodies;
 }
 
-// Runs a 2-D scene in a temporary folder and returns its snapshot 1.
-ParticleStore<2> run_and_read_first_output(const Scene& s, const std::string& name) {
+// Runs a scene quietly into a fresh temporary folder (the caller removes
+// it) and returns the folder.
+std::filesystem::path run_in_temp_dir(const Scene& s, const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
   std::filesystem::remove_all(dir);
   RunOptions opt;
   opt.out_dir = dir.string();
   opt.quiet = true;
   run_scene(s, opt);
+  return dir;
+}
+
+// Runs a 2-D scene in a temporary folder and returns its snapshot 1.
+ParticleStore<2> run_and_read_first_output(const Scene& s, const std::string& name) {
+  const auto dir = run_in_temp_dir(s, name);
   ParticleStore<2> ps;
   SnapshotMeta meta;
   read_snapshot<2>((dir / snapshot_filename(s.output.name, 1)).string(), ps, meta);
@@ -305,12 +312,7 @@ EnergyBudget elastic_budget_of_run(bool kernel_correction, const std::string& na
       std::to_string(g) + ", 0.0], [0.0, 0.0]]\n\n[output]\ninterval = 4.5e-5\n";
   const Scene s = parse_scene(scene, "t.toml");
   const EosParams eos = eos_params_from_material(s.materials[0]);
-  const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
-  std::filesystem::remove_all(dir);
-  RunOptions opt;
-  opt.out_dir = dir.string();
-  opt.quiet = true;
-  run_scene(s, opt);
+  const auto dir = run_in_temp_dir(s, name);
   EnergyBudget out;
   double elastic_total0 = 0, internal_total0 = 0;
   for (int k = 0;; ++k) {
@@ -375,13 +377,7 @@ TEST(SolidRun, KernelCorrectionConservesAngularMomentum) {
   auto angular_momentum_drift = [&](bool corrected) {
     Scene s = parse_scene(scene, "t.toml");
     s.simulation.kernel_correction = corrected;
-    const auto dir = std::filesystem::temp_directory_path() / "rubble_solid_angular";
-    std::filesystem::remove_all(dir);
-    RunOptions opt;
-    opt.out_dir = dir.string();
-    opt.quiet = true;
-    const FinalState f = run_scene(s, opt);
-    EXPECT_EQ(f.correction_fallbacks, 0);
+    const auto dir = run_in_temp_dir(s, "angular");
     std::ifstream csv(dir / "conserved.csv");
     std::string header, line, last, first;
     std::getline(csv, header);
