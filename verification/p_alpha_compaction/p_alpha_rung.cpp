@@ -59,6 +59,39 @@
 //         the smoothing length being the solver's h (kernel support radius,
 //         2 dx here; docs/scene.md hfact) of the particle nearest the front;
 //       - L1 of rho, alpha, v, p falls at every refinement (ratio >= 1).
+//     Also recorded, not gated: the equal-area position in rho of each
+//     front (equal_area_front), where a sharp jump holding the same mass
+//     would sit.
+//     The elastic front check fails (2.18 h at N = 2000, a known failure in
+//     CMakeLists.txt). Diagnosis (numbers from this rung, --set to vary):
+//       - not the measurement: the precursor profile is nearly symmetric, its
+//         equal-area position in rho (+2.34 h at N = 2000) lies even further
+//         ahead than the half-amplitude point (+2.18 h), so half-amplitude
+//         and the mass-conserving position agree to 0.16 h; no lag at the
+//         kink (the SPH front is ahead, not behind);
+//       - not the analytic speed: the SPH half-amplitude point moves at
+//         3630.3 m/s between t = 0.4 and 3.5 us (N = 2000), the reference at
+//         U_e − V = 3630.5 m/s (U_e = 4088.5 m/s from the solver's own EOS and
+//         elastic branch; nominal c_e = 4110 m/s would give 3652 m/s);
+//       - a start-up offset, set by the impulsive collision at t = 0 and
+//         artificial viscosity: at N = 2000 it is 2.03 h already at t = 25 ns
+//         (the front 9 dx from the wall) and 2.18–2.21 h from 0.2 to 3.5 us,
+//         i.e. constant in metres (0.040–0.044 mm) once formed; it scales
+//         with the viscosity (t = 0.4 us: 1.31 h at alpha = 0.5, beta = 1;
+//         2.21 h at 1, 2; 4.05 h at 2, 4) and persists with the elastic
+//         branch made negligible (c_e = 5349.9: 1.77 h at N = 250, 1.74 h at
+//         500). With an impulsive start the only length is h (the problem is
+//         self-similar: N = 250 at 3.5 us and N = 500 at 1.75 us give the
+//         same profile in units of h), so the offset is c h, first order in
+//         metres (0.354, 0.180, 0.0892, 0.0436 mm at N = 250 ... 2000,
+//         orders 0.98, 1.01, 1.03) with c = 2.21, 2.25, 2.23, 2.18 at every N;
+//       - why this front only: the precursor is weak. Its lead holds
+//         (rho_E − rho0)·2.34 h = 2.3e-4 kg/m² of extra mass at N = 2000,
+//         1.1 % of one particle's mass, matched by a deficit of the same size
+//         in the compacted material near the collision plane; the same mass
+//         moves the compaction front (jump 128 times larger) by 0.018 h.
+//     So the front converges at first order but its constant exceeds the
+//     issue's 2 h, with the scene's standard viscosity (alpha = 1, beta = 2).
 //     Spheral's regression references for the same setup (LLNL/spheral,
 //     tests/functional/Porosity/PlanarCompaction/PlanarCompaction-1d.py,
 //     LnormRef["SPH"], nx = 500 over 2 cm — the same dx as our N = 500) are
@@ -467,6 +500,25 @@ double crossing(const std::vector<Particle>& P, double level, F q) {
   return std::nan("");
 }
 
+// The equal-area (conservation) position of a smeared jump of field q from
+// the plateau value qa (x <= a) to qb (x >= b): a + integral_a^b (q − qb)/(qa −
+// qb) dx (trapezoid over the particles). It is where a sharp jump with the
+// same content of q would sit, the position that the Rankine–Hugoniot front
+// of the analytic solution corresponds to; for a symmetric profile it is the
+// half-amplitude point. A diagnostic beside the gated half-amplitude front.
+template <class F>
+double equal_area_front(const std::vector<Particle>& P, double a, double b, double qa, double qb, F q) {
+  double x0 = std::nan(""), xp = 0, sp = 0, integral = 0;
+  for (const auto& p : P) {
+    if (p.x < a || p.x > b) continue;
+    const double s = (q(p) - qb) / (qa - qb);
+    if (std::isnan(x0)) x0 = p.x;
+    else integral += 0.5 * (s + sp) * (p.x - xp);
+    xp = p.x, sp = s;
+  }
+  return x0 + integral;
+}
+
 double h_near(const std::vector<Particle>& P, double x) {
   double best = 1e300, h = std::nan("");
   for (const auto& p : P)
@@ -547,6 +599,14 @@ int run_piston(const Args& args) {
     const double xs_sph = crossing(P, 0.5 * (S.elastic.alpha + S.compacted.alpha), [](const Particle& q) { return q.alpha; });
     const double xe_sph = crossing(P, 0.5 * (S.elastic.p + S.initial.p), [](const Particle& q) { return q.p; });
     const double hs = h_near(P, xs), he = h_near(P, xe);
+    // equal-area positions in rho (diagnostic; mass is what the jump
+    // conditions conserve): compaction front between the middles of the
+    // compacted and elastic plateaus, elastic front from the middle of the
+    // elastic plateau to as far ahead of x_e
+    auto rho_of = [](const Particle& q) { return q.rho; };
+    const double xs_ea = equal_area_front(P, 0.5 * xs, 0.5 * (xs + xe), Sw.rho, Ew.rho, rho_of);
+    const double xe_ea = equal_area_front(P, 0.5 * (xs + xe), std::min(xe + 0.5 * (xe - xs), P.back().x - 0.1 * kRod),
+                                          Ew.rho, Iw.rho, rho_of);
     const Plateau ps = plateau_mean(P, 0.25 * xs, 0.75 * xs);
     const Plateau pe = plateau_mean(P, xs + 0.25 * (xe - xs), xs + 0.75 * (xe - xs));
 
@@ -642,8 +702,8 @@ int run_piston(const Args& args) {
                                   "LnormRef['SPH'] (regression baseline, nx=500 over 2 cm, WendlandC4, grid-weighted L1 "
                                   "over the rod less 10 dx at each end; converted to SI). No published L1 errors found."}})},
         {"observed_order", orders},
-        {"fronts", Json::object({{"compaction", Json::object({{"sph", xs_sph}, {"exact", xs}, {"h", hs}})},
-                                 {"elastic", Json::object({{"sph", xe_sph}, {"exact", xe}, {"h", he}})}})},
+        {"fronts", Json::object({{"compaction", Json::object({{"sph", xs_sph}, {"sph_equal_area", xs_ea}, {"exact", xs}, {"h", hs}})},
+                                 {"elastic", Json::object({{"sph", xe_sph}, {"sph_equal_area", xe_ea}, {"exact", xe}, {"h", he}})}})},
         {"plateaus", Json::object({{"compacted", plateau_json(ps, Sw)}, {"elastic", plateau_json(pe, Ew)}})},
         {"analytic", Json::object({{"elastic_speed", S.elastic_speed}, {"compaction_speed", S.compaction_speed},
                                    {"c_path_initial", S.c_path_initial}, {"c_path_elastic", S.c_path_elastic},
@@ -666,6 +726,8 @@ int run_piston(const Args& args) {
                 static_cast<long long>(fs.steps), fs.wall_seconds, t);
     std::printf("  fronts: compaction %.5g mm (exact %.5g, |d|/h %.3g)  elastic %.5g mm (exact %.5g, |d|/h %.3g)\n",
                 xs_sph * 1e3, xs * 1e3, std::fabs(xs_sph - xs) / hs, xe_sph * 1e3, xe * 1e3, std::fabs(xe_sph - xe) / he);
+    std::printf("  fronts, equal-area (diagnostic): compaction (x - x_exact)/h %+.3g  elastic (x - x_exact)/h %+.3g\n",
+                (xs_ea - xs) / hs, (xe_ea - xe) / he);
     std::printf("  compacted plateau rho %.6g (%.6g) p %.6g (%.6g) alpha %.6g (%.6g) v %.4g (%.4g)\n", ps.rho, Sw.rho, ps.p,
                 Sw.p, ps.alpha, Sw.alpha, ps.v, Sw.v);
     std::printf("  elastic plateau   rho %.6g (%.6g) p %.6g (%.6g) alpha %.6g (%.6g) v %.4g (%.4g)\n", pe.rho, Ew.rho, pe.p,
