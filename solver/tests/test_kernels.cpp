@@ -347,6 +347,51 @@ TEST(Kernels, GradientMatchesFiniteDifferences) {
   }
 }
 
+// KernelAt (1/H and sigma/H^n computed once, for loops over neighbours)
+// gives W, dW/dH and the gradient of the per-call functions to rounding:
+// q = r (1/H) differs from r/H by at most an ulp, so a few ulps of the
+// kernel's central value (and of the gradient's scale W(0)/H) bound the
+// difference over the whole support, including q = 0 and q -> 1.
+template <int D>
+void check_kernel_at(KernelType k) {
+  for (const double H : {0.37, 1.0, 2.9}) {
+    const rubble::KernelAt<D> K = rubble::kernel_at<D>(k, Real(H));
+    const double w0 = double(rubble::kernel_w<D>(k, 0, Real(H)));
+    const double tol = 64 * kEps;
+    for (int j = 0; j <= 400; ++j) {
+      const double r = j / 400.0 * H * 1.001;
+      const rubble::KernelWDwdh wd = rubble::kernel_w_dwdh<D>(K, Real(r));
+      EXPECT_LE(std::fabs(double(wd.w) - double(rubble::kernel_w<D>(k, Real(r), Real(H)))), tol * w0)
+          << rubble::kernel_name(k) << " D=" << D << " q=" << r / H;
+      EXPECT_LE(std::fabs(double(wd.dwdh) - double(rubble::kernel_dwdh<D>(k, Real(r), Real(H)))), tol * D * w0 / H)
+          << rubble::kernel_name(k) << " D=" << D << " q=" << r / H;
+      Vec<D> x = Vec<D>::zero();
+      x[0] = Real(r * 0.6);
+      if (D > 1) x[1] = Real(-r * 0.8);
+      if (D == 1) x[0] = Real(r);
+      const Vec<D> g = rubble::kernel_grad<D>(K, x, rubble::norm(x));
+      const Vec<D> g_ref = rubble::kernel_grad<D>(k, x, Real(H));
+      for (int i = 0; i < D; ++i)
+        EXPECT_LE(std::fabs(double(g[i]) - double(g_ref[i])), tol * w0 / H)
+            << rubble::kernel_name(k) << " D=" << D << " q=" << r / H << " component " << i;
+      if (j == 0) continue;  // the form with 1/r needs r > 0
+      const Real rr = rubble::norm(x);
+      const Vec<D> g_inv = rubble::kernel_grad<D>(K, x, rr, Real(1) / rr);
+      for (int i = 0; i < D; ++i)
+        EXPECT_LE(std::fabs(double(g_inv[i]) - double(g_ref[i])), tol * w0 / H)
+            << rubble::kernel_name(k) << " D=" << D << " q=" << r / H << " component " << i << " (with 1/r)";
+    }
+  }
+}
+
+TEST(Kernels, KernelAtAgreesWithThePerCallFunctions) {
+  for (KernelType k : kAll) {
+    check_kernel_at<1>(k);
+    check_kernel_at<2>(k);
+    check_kernel_at<3>(k);
+  }
+}
+
 // ---- 5. Positivity, compact support, continuity ----------------------------------------
 
 template <int D>

@@ -126,12 +126,15 @@ struct DensitySums {
 template <int D, class Each>
 RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t a, Real h, Each&& each) {
   const StoreView<D>& s = c.s;
-  DensitySums out{s.m[a] * kernel_w<D>(c.kernel, Real(0), h), s.m[a] * kernel_dwdh<D>(c.kernel, Real(0), h)};
+  const KernelAt<D> K = kernel_at<D>(c.kernel, h);
+  const KernelWDwdh self = kernel_w_dwdh<D>(K, Real(0));
+  DensitySums out{s.m[a] * self.w, s.m[a] * self.dwdh};
   each([&](std::uint32_t b) {
     const Real r = norm(c.domain.separation(s.x[a], s.x[b]));
     if (r >= h) return;
-    out.rho += s.m[b] * kernel_w<D>(c.kernel, r, h);
-    out.dwdh += s.m[b] * kernel_dwdh<D>(c.kernel, r, h);
+    const KernelWDwdh w = kernel_w_dwdh<D>(K, r);
+    out.rho += s.m[b] * w.w;
+    out.dwdh += s.m[b] * w.dwdh;
   });
   return out;
 }
@@ -370,13 +373,14 @@ RUBBLE_HD_INLINE HydroParticle<D> hydro_particle(const RhsContext<D>& c, std::ui
 template <int D, class Each>
 RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   const StoreView<D>& s = c.s;
-  const HydroParticle<D> pa = hydro_particle<D>(c, a);
+  const HydroSide<D> pa = hydro_side<D>(c.kernel, hydro_particle<D>(c, a));
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
     HydroParticle<D> pb = hydro_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
-    const HydroPairRates<D> r = hydro_pair<D>(c.kernel, pa, pb, c.domain.separation(s.x[a], s.x[b]), !c.summation);
+    const HydroPairRates<D> r =
+        hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true), c.domain.separation(s.x[a], s.x[b]), !c.summation);
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;
@@ -407,7 +411,8 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
     const Real r = norm(dx);
     if (r > Real(0) && r < r_min) r_min = r;
     if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
-    const Vec<D> g = Real(0.5) * (kernel_grad<D>(c.kernel, dx, s.h[a]) + kernel_grad<D>(c.kernel, dx, s.h[b]));
+    const Vec<D> g =
+        Real(0.5) * (kernel_grad<D>(kernel_at<D>(c.kernel, s.h[a]), dx, r) + kernel_grad<D>(kernel_at<D>(c.kernel, s.h[b]), dx, r));
     // volume weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp)
     const Real rho_w = c.kernel_correction ? s.rho[a] : s.rho[b];
     L += velocity_gradient_pair_term<D>(s.m[b], rho_w, seen_velocity<D>(s, a, b) - s.v[a], g);

@@ -54,48 +54,77 @@ struct HydroPairRates {
   Real mu;      // |mu_ab| for the Courant condition
 };
 
+// One particle of a pair with the factors its side of every pair term uses
+// computed once: its kernel's 1/h and sigma/h^n, p/(Omega rho^2) and
+// 1/Omega. A neighbour loop prepares particle a once for all its neighbours
+// (issue #14: the per-pair divisions were most of the force loop's time).
+template <int D>
+struct HydroSide {
+  HydroParticle<D> q;
+  KernelAt<D> K;
+  Real f;          // pressure_factor(p, omega, rho)
+  Real inv_omega;  // 1/Omega, read only on a's side (0 on a neighbour's)
+};
+
+// `neighbour`: the side of b, whose 1/Omega no pair term reads.
+template <int D>
+RUBBLE_HD_INLINE HydroSide<D> hydro_side(KernelType kernel, const HydroParticle<D>& q, bool neighbour = false) {
+  return HydroSide<D>{q, kernel_at<D>(kernel, q.h), pressure_factor(q.p, q.omega, q.rho),
+                      neighbour ? Real(0) : Real(1) / q.omega};
+}
+
 // The complete hydrodynamic interaction of b on a; dx = x_a - x_b (minimum
 // image). Both backends loop over neighbours and add these up.
 // Material coefficients of a pair are the arithmetic means of the two
 // particles' values, which keeps the pair force antisymmetric.
 template <int D>
-RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(KernelType kernel, const HydroParticle<D>& a,
-                                              const HydroParticle<D>& b, const Vec<D>& dx,
+RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(const HydroSide<D>& sa, const HydroSide<D>& sb, const Vec<D>& dx,
                                               bool symmetric = false) {
+  const HydroParticle<D>& a = sa.q;
+  const HydroParticle<D>& b = sb.q;
   HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
   const Real r2 = norm2(dx);
+  const Real h_max = a.h > b.h ? a.h : b.h;
+  if (r2 >= h_max * h_max) return out;  // most entries beyond the support stop here, before the root
   const Real r = std::sqrt(r2);
   if (r <= Real(0)) return out;
   if (r >= a.h && r >= b.h) return out;
+  const Real inv_r = Real(1) / r;
 
-  Vec<D> g_a = kernel_grad<D>(kernel, dx, a.h);
-  Vec<D> g_b = kernel_grad<D>(kernel, dx, b.h);
+  Vec<D> g_a = kernel_grad<D>(sa.K, dx, r, inv_r);
+  Vec<D> g_b = kernel_grad<D>(sb.K, dx, r, inv_r);
   const Vec<D> gbar = Real(0.5) * (g_a + g_b);
   if (symmetric) g_a = g_b = gbar;
   const Vec<D> dv = a.v - b.v;
 
-  const Real fa = pressure_factor(a.p, a.omega, a.rho);
-  const Real fb = pressure_factor(b.p, b.omega, b.rho);
-
   // Monaghan viscosity with pair-mean coefficients.
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
-  const Real hbar = monaghan_h<D>(kernel, Real(0.5) * (a.h + b.h));
+  const Real hbar = monaghan_h<D>(sa.K.k, Real(0.5) * (a.h + b.h));
   const Real mu = viscosity_mu(dot(dv, dx), r2, hbar);
   const Real rhobar = Real(0.5) * (a.rho + b.rho);
   const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
 
-  out.dvdt = b.m * (pressure_acceleration<D>(fa, fb, g_a, g_b) - pi_ab * gbar);
-  out.dudt = b.m * (fa * dot(dv, g_a) + Real(0.5) * pi_ab * dot(dv, gbar));
-  out.drhodt = b.m * dot(dv, g_a) / a.omega;
+  const Real dv_ga = dot(dv, g_a);
+  out.dvdt = b.m * (pressure_acceleration<D>(sa.f, sb.f, g_a, g_b) - pi_ab * gbar);
+  out.dudt = b.m * (sa.f * dv_ga + Real(0.5) * pi_ab * dot(dv, gbar));
+  out.drhodt = b.m * dv_ga * sa.inv_omega;
   out.mu = -mu;
 
   const Real alpha_u = Real(0.5) * (a.alpha_u + b.alpha_u);
   if (alpha_u > Real(0)) {
-    const Real F_ab = dot(gbar, dx) / r;  // gbar = xhat F_ab
+    const Real F_ab = dot(gbar, dx) * inv_r;  // gbar = xhat F_ab
     const Real vsig_u = conductivity_signal_speed(a.p, b.p, rhobar);
     out.dudt += b.m * conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
   }
   return out;
+}
+
+// The same for two particles not prepared beforehand (tests, single pairs).
+template <int D>
+RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(KernelType kernel, const HydroParticle<D>& a,
+                                              const HydroParticle<D>& b, const Vec<D>& dx,
+                                              bool symmetric = false) {
+  return hydro_pair<D>(hydro_side<D>(kernel, a), hydro_side<D>(kernel, b, true), dx, symmetric);
 }
 
 }  // namespace rubble

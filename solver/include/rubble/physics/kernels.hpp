@@ -128,6 +128,18 @@ RUBBLE_HD_INLINE Real dshape_over_q(KernelType k, Real q) {
   return Real(0);
 }
 
+// f'(q) itself, for gradients formed with 1/r known: the cubic spline's
+// outer branch without the division by q; q (f'/q) for the Wendland
+// kernels, whose f'/q above has no division.
+template <int D>
+RUBBLE_HD_INLINE Real dshape(KernelType k, Real q) {
+  if (k == KernelType::CubicSpline) {
+    const Real u = Real(1) - q;
+    return q < Real(0.5) ? Real(6) * q * (Real(3) * q - Real(2)) : Real(-6) * u * u;
+  }
+  return q * dshape_over_q<D>(k, q);
+}
+
 }  // namespace kernel_detail
 
 // W(r, H), normalised so that ∫ W dV = 1 in D dimensions; zero for r >= H.
@@ -166,6 +178,62 @@ RUBBLE_HD_INLINE Vec<D> kernel_grad(KernelType k, const Vec<D>& dx, Real H) {
   const Real s = kernel_detail::sigma<D>(k) / kernel_detail::ipow<D + 2>(H) *
                  kernel_detail::dshape_over_q<D>(k, q);
   return dx * s;
+}
+
+// ---- one support radius, many neighbours ---------------------------------
+// A loop over a particle's neighbours evaluates the kernel of one H at many
+// r. KernelAt holds 1/H and sigma/H^n once, so that a neighbour costs no
+// division (the cubic spline's outer gradient excepted): the formulas are
+// those of kernel_w, kernel_dwdh and kernel_grad above, and the results
+// agree with them to rounding (q = r * (1/H) instead of r / H; tested in
+// test_kernels.cpp). Issue #14: the divisions and square roots of the
+// per-call functions were a third of the force loop's time.
+template <int D>
+struct KernelAt {
+  KernelType k;
+  Real inv_h;   // 1/H
+  Real c_w;     // sigma_D / H^D
+  Real c_dh;    // sigma_D / H^(D+1)
+  Real c_grad;  // sigma_D / H^(D+2)
+};
+
+template <int D>
+RUBBLE_HD_INLINE KernelAt<D> kernel_at(KernelType k, Real H) {
+  const Real inv = Real(1) / H;
+  const Real c = kernel_detail::sigma<D>(k) * kernel_detail::ipow<D>(inv);
+  return KernelAt<D>{k, inv, c, c * inv, c * inv * inv};
+}
+
+// W(r, H) and ∂W/∂H(r, H) from one evaluation of q (summation density and
+// its grad-h term need both at every neighbour).
+struct KernelWDwdh {
+  Real w, dwdh;
+};
+
+template <int D>
+RUBBLE_HD_INLINE KernelWDwdh kernel_w_dwdh(const KernelAt<D>& K, Real r) {
+  const Real q = r * K.inv_h;
+  if (q >= Real(1)) return KernelWDwdh{Real(0), Real(0)};
+  const Real f = kernel_detail::shape<D>(K.k, q);
+  const Real qdf = q * q * kernel_detail::dshape_over_q<D>(K.k, q);
+  return KernelWDwdh{K.c_w * f, -K.c_dh * (Real(D) * f + qdf)};
+}
+
+// ∇_a W(|dx|, H) with r = |dx| already known.
+template <int D>
+RUBBLE_HD_INLINE Vec<D> kernel_grad(const KernelAt<D>& K, const Vec<D>& dx, Real r) {
+  const Real q = r * K.inv_h;
+  if (q >= Real(1)) return Vec<D>::zero();
+  return dx * (K.c_grad * kernel_detail::dshape_over_q<D>(K.k, q));
+}
+
+// The same with 1/r known as well (r > 0): sigma/H^(D+1) f'(q) dx/r, so that
+// a pair's two gradients share one division.
+template <int D>
+RUBBLE_HD_INLINE Vec<D> kernel_grad(const KernelAt<D>& K, const Vec<D>& dx, Real r, Real inv_r) {
+  const Real q = r * K.inv_h;
+  if (q >= Real(1)) return Vec<D>::zero();
+  return dx * (K.c_dh * kernel_detail::dshape<D>(K.k, q) * inv_r);
 }
 
 // Default H/Δx for each kernel (see "Default H / Δx" above).

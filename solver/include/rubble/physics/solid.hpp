@@ -91,7 +91,7 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
   if (r <= Real(0)) return out;
   if (r >= a.h && r >= b.h) return out;
 
-  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel, dx, a.h) + kernel_grad<D>(kernel, dx, b.h));
+  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel_at<D>(kernel, a.h), dx, r) + kernel_grad<D>(kernel_at<D>(kernel, b.h), dx, r));
   const Vec<D> dv = a.v - b.v;
 
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
