@@ -199,7 +199,7 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   const std::size_t n = x_.size();
   out.begin_.assign(n, 0);
   out.count_.assign(n, 0);
-  out.owner_.assign(n, 0);
+  out.block_.assign(n, 0);
   if (n == 0) return;
 
   // Squared distance between two boxes (a point is a box with lo == hi).
@@ -224,28 +224,67 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   Real half[D];
   for (int k = 0; k < D; ++k) half[k] = Real(0.5) * (box.hi[k] - box.lo[k]);
 
-  // Each thread appends the lists of the particles of its groups to its
-  // own buffer (kept from the last search) and notes where each list is.
+  // Each thread writes the lists of the particles of its groups into its
+  // own blocks (kept from the last search) and notes where each list is.
+  // Inside the parallel region a thread reads only its own block
+  // references; the shared table of blocks is touched in a critical section
+  // (a block's data never move: the table holds vectors that are not resized).
+  struct BlockRef {
+    std::uint32_t id;
+    std::uint32_t* data;
+    std::size_t size;
+  };
   const int threads = max_threads();
-  if (threads > 65535) throw std::length_error("CellList::find_neighbors: more than 65535 threads");
-  if (int(out.buffers_.size()) < threads) out.buffers_.resize(threads);
+  if (int(out.thread_blocks_.size()) < threads) out.thread_blocks_.resize(threads);
+  std::vector<std::vector<BlockRef>> refs(threads);
+  for (int t = 0; t < threads; ++t)
+    for (const std::uint32_t b : out.thread_blocks_[t]) refs[t].push_back({b, out.blocks_[b].data(), out.blocks_[b].size()});
   std::uint32_t* begin = out.begin_.data();
   std::uint32_t* count = out.count_.data();
-  std::uint16_t* owner = out.owner_.data();
+  std::uint32_t* block_of = out.block_.data();
 
 #pragma omp parallel num_threads(threads)
   {
     const int t = thread_id();
-    // buf grows but never shrinks; `used` entries are valid. Room for a
-    // whole cell is made before testing it, so that the test can write
-    // every candidate and advance only on a hit (no branch to mispredict).
-    std::vector<std::uint32_t>& buf = out.buffers_[t];
+    std::vector<BlockRef>& mine = refs[t];
+    std::size_t owned_capacity = 0;  // entries in this thread's blocks
+    for (const BlockRef& r : mine) owned_capacity += r.size;
+    // The block being written (index into `mine`, or none yet); `used`
+    // entries of it are valid.
+    std::size_t k = 0;
+    const BlockRef* cur = nullptr;
     std::size_t used = 0;
+    // Make the next block current, with room for at least `need` entries,
+    // carrying over the `keep` entries of the list being written. A block
+    // of this thread's that is too small is skipped (and kept for later
+    // searches); a new one holds an eighth of what the thread owns, so the
+    // spare room stays small and the count of blocks grows slowly.
+    auto next_block = [&](std::size_t need, std::size_t keep) {
+      const std::uint32_t* carry = cur ? cur->data + used - keep : nullptr;
+      std::size_t j = cur ? k + 1 : 0;
+      while (j < mine.size() && mine[j].size < need) ++j;
+      if (j == mine.size()) {
+        const std::size_t size = std::max({need, std::size_t(4096), owned_capacity / 8});
+        BlockRef r{};
+#pragma omp critical(rubble_neighbor_blocks)
+        {
+          out.blocks_.emplace_back(size);
+          r = BlockRef{std::uint32_t(out.blocks_.size() - 1), out.blocks_.back().data(), size};
+        }
+        mine.push_back(r);
+        owned_capacity += size;
+      }
+      if (keep > 0) std::copy(carry, carry + keep, mine[j].data);  // before `mine` can move again
+      k = j;
+      cur = &mine[j];
+      used = keep;
+    };
     std::vector<std::uint32_t> near;  // cells within reach of the current group
 
     // static: each thread takes the same run of groups in every search, so
-    // its buffer's size settles (with dynamic scheduling a buffer would grow
-    // to the most any search ever gave its thread, up to all the lists)
+    // its blocks are reused in the same order and their count settles
+    // (with dynamic scheduling a thread's blocks would grow to the most any
+    // search ever gave it, up to all the lists)
 #pragma omp for schedule(static)
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       const Node& g = nodes[groups_[gi]];
@@ -266,53 +305,56 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
       for (std::uint32_t a = g.begin; a < g.end; ++a) {
         const Vec<D> xa = xs[a];
         const Real ha = hs[a];
-        const std::size_t first = used;
+        if (!cur) next_block(0, 0);
+        std::size_t first = used;
         for (const std::uint32_t j : near) {
           const Node& m = nodes[j];
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
-          const std::size_t room = used + (m.end - m.begin);
-          if (buf.size() < room) {
-            // a quarter more: the spare room stays small, and a run's
-            // buffers stop growing after its first searches
-            if (room > std::numeric_limits<std::uint32_t>::max())
-              throw std::length_error("CellList::find_neighbors: more than 2^32 - 1 neighbour entries in one thread");
-            const std::size_t grown = std::max(buf.size() + buf.size() / 4, room + 4096);
-            buf.reserve(grown);  // exactly (resize alone may double the capacity)
-            buf.resize(grown);
+          // Room for the whole cell before testing it, so that the test
+          // can write every candidate and advance only on a hit (no branch
+          // to mispredict); a full block passes the list so far to the next.
+          if (used + (m.end - m.begin) > cur->size) {
+            next_block((used - first) + (m.end - m.begin), used - first);
+            first = 0;
           }
-          std::uint32_t* out = buf.data() + used;
+          std::uint32_t* out_list = cur->data + used;
           std::size_t hits = 0;
           // If no coordinate difference to this cell can exceed L/2, the
           // minimum image is the plain difference (what separation would
           // return, bit for bit): skip its wrap tests.
           bool direct = true;
-          for (int k = 0; k < D; ++k)
-            if (box.periodic[k]) direct = direct && xa[k] - m.lo[k] <= half[k] && xa[k] - m.hi[k] >= -half[k];
+          for (int k2 = 0; k2 < D; ++k2)
+            if (box.periodic[k2]) direct = direct && xa[k2] - m.lo[k2] <= half[k2] && xa[k2] - m.hi[k2] >= -half[k2];
           if (direct) {
             for (std::uint32_t b = m.begin; b < m.end; ++b) {
               const Real r = std::max(ha, hs[b]);
-              out[hits] = order[b];
+              out_list[hits] = order[b];
               hits += (norm2(xa - xs[b]) < r * r) & (b != a);
             }
           } else {
             for (std::uint32_t b = m.begin; b < m.end; ++b) {
               const Real r = std::max(ha, hs[b]);
-              out[hits] = order[b];
+              out_list[hits] = order[b];
               hits += (norm2(box.separation(xa, xs[b])) < r * r) & (b != a);
             }
           }
           used += hits;
         }
         // Ascending input index (already so when the input was in spatial order).
-        const auto list = buf.begin() + std::ptrdiff_t(first), list_end = buf.begin() + std::ptrdiff_t(used);
+        std::uint32_t* const list = cur->data + first;
+        std::uint32_t* const list_end = cur->data + used;
         if (!std::is_sorted(list, list_end)) std::sort(list, list_end);
         const std::uint32_t i = order[a];  // input index
         begin[i] = std::uint32_t(first);
         count[i] = std::uint32_t(used - first);
-        owner[i] = std::uint16_t(t);
+        block_of[i] = cur->id;
       }
     }
+  }
+  for (int t = 0; t < threads; ++t) {
+    out.thread_blocks_[t].clear();
+    for (const BlockRef& r : refs[t]) out.thread_blocks_[t].push_back(r.id);
   }
 }
 

@@ -49,6 +49,14 @@ class HydroCpu {
   const Box<D>& domain() const { return domain_; }
   bool summation_density() const { return summation_; }
   std::int64_t neighbor_rebuilds() const { return rebuilds_; }
+  // Frees the neighbour lists, the cell list and the search radii once the
+  // run is over (the next evaluation would rebuild them), so that the final
+  // state's copy does not add to the run's peak memory (issue #14).
+  void release_work_memory() {
+    nbrs_ = NeighborLists{};
+    cells_ = CellList<D>{};
+    std::vector<Real>().swap(search_radius_);
+  }
   // Calls of evaluate() so far (each evaluates every particle once).
   std::int64_t evaluations() const { return evaluations_; }
   // Solids: does the run evolve the deviatoric stress (the Solid feature set)?

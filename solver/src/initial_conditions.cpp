@@ -315,8 +315,8 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
         },
         f.member);
   const std::size_t integrator = scene.simulation.integrator == Integrator::RK2Adaptive ? 2 * store : store / 2;
-  // neighbours within the search radius 1.15 h (h = hfact spacings)
-  const double r = 1.15 * hfact, pi = std::numbers::pi;
+  // neighbours within the search radius kSearchSkin h (h = hfact spacings)
+  const double r = kSearchSkin * hfact, pi = std::numbers::pi;
   const double neighbours = D == 1 ? 2 * r : D == 2 ? pi * r * r : 4 * pi / 3 * r * r * r;
   const std::size_t lists = std::size_t(4 * neighbours) + 4;
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);

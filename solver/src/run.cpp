@@ -324,6 +324,12 @@ class CpuStepper {
       if (f.snapshot) std::visit([&](auto member) { good_.*member = ps_.*member; }, f.member);
   }
   const ParticleStore<D>& last_good() const { return good_; }
+  // After the time loop: the last good state and the driver's neighbour
+  // data are no longer needed (run_loop, before it copies the final state).
+  void release_work_memory() {
+    good_ = ParticleStore<D>{};
+    sys_.release_work_memory();
+  }
   std::size_t size() const { return ps_.n; }
   std::int64_t bytes_downloaded() const { return 0; }  // the state never leaves the host
   std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
@@ -567,6 +573,10 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     }
   }
   progress.finish();
+  // The copy of the final state below comes on top of what the stepper
+  // holds: let it free what the loop needed (CPU: the last good state, the
+  // neighbour lists; issue #14, peak memory per particle).
+  if constexpr (requires { sys.release_work_memory(); }) sys.release_work_memory();
 
   FinalState fs;
   fs.phase_seconds = {{"set-up", set_up}, {"sort", t_sort}, {"time-step limit", t_limit}, {"state checks", t_checks}};

@@ -37,18 +37,26 @@
 
 namespace rubble {
 
+// The CPU driver's search radius for summation density, as a multiple of
+// the particle's current support radius: the room h has to grow in the
+// smoothing-length iteration before its lists must be rebuilt
+// (hydro_cpu.cpp; also the memory estimate of initial_conditions.cpp).
+inline constexpr double kSearchSkin = 1.05;
+
 // The neighbour lists of n particles, each in ascending order, as the
 // search threads wrote them: particle i's list is `count(i)` indices from
-// `list(i)` in the buffer of the thread that found them. Nothing is copied
-// into one array (that copy doubled the peak memory of the lists), and the
-// buffers persist from one search to the next, growing by a quarter when a
-// search needs more, so a run settles at about 1.0-1.25 times the lists'
-// size (issue #14: memory per particle).
+// `list(i)`, in one of the blocks of the thread that found them. Nothing is
+// copied into one array (that copy doubled the peak memory of the lists),
+// and a thread that fills a block starts a new one instead of growing the
+// old (growing by reallocation held the old and the new buffer at once, and
+// left up to a quarter of the room spare). Blocks persist from one search
+// to the next and each thread reuses its own in order, so a run settles at
+// about the lists' size plus an eighth (issue #14: memory per particle).
 class NeighborLists {
  public:
   std::size_t size() const { return begin_.size(); }
   std::size_t count(std::size_t i) const { return count_[i]; }
-  const std::uint32_t* list(std::size_t i) const { return buffers_[owner_[i]].data() + begin_[i]; }
+  const std::uint32_t* list(std::size_t i) const { return blocks_[block_[i]].data() + begin_[i]; }
   // particle i's list as a vector (tests, rare uses)
   std::vector<std::uint32_t> copy(std::size_t i) const { return {list(i), list(i) + count(i)}; }
   // entries over all lists
@@ -57,20 +65,21 @@ class NeighborLists {
     for (std::uint32_t c : count_) t += c;
     return t;
   }
-  // bytes held: buffers (with their spare room) and the per-particle index
+  // bytes held: the blocks (with their spare room) and the per-particle index
   std::size_t bytes() const {
-    std::size_t b = begin_.capacity() * sizeof(std::uint32_t) + count_.capacity() * sizeof(std::uint32_t) +
-                    owner_.capacity() * sizeof(std::uint16_t);
-    for (const auto& buf : buffers_) b += buf.capacity() * sizeof(std::uint32_t);
+    std::size_t b = (begin_.capacity() + count_.capacity() + block_.capacity()) * sizeof(std::uint32_t);
+    for (const auto& blk : blocks_) b += blk.capacity() * sizeof(std::uint32_t);
     return b;
   }
+  std::size_t block_count() const { return blocks_.size(); }
 
  private:
   template <int D>
   friend class CellList;
-  std::vector<std::vector<std::uint32_t>> buffers_;  // one per search thread
-  std::vector<std::uint32_t> begin_, count_;         // per particle, in input order
-  std::vector<std::uint16_t> owner_;                 // the buffer holding the list
+  std::vector<std::vector<std::uint32_t>> blocks_;         // all blocks, of every thread
+  std::vector<std::vector<std::uint32_t>> thread_blocks_;  // per search thread: its blocks in order of use
+  std::vector<std::uint32_t> begin_, count_;               // per particle, in input order
+  std::vector<std::uint32_t> block_;                       // the block holding the list
 };
 
 template <int D>
