@@ -231,7 +231,7 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   // (a block's data never move: the table holds vectors that are not resized).
   struct BlockRef {
     std::uint32_t id;
-    std::uint32_t* data;
+    std::uint16_t* data;
     std::size_t size;
   };
   const int threads = max_threads();
@@ -247,24 +247,22 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
   {
     const int t = thread_id();
     std::vector<BlockRef>& mine = refs[t];
-    std::size_t owned_capacity = 0;  // entries in this thread's blocks
+    std::size_t owned_capacity = 0;  // units in this thread's blocks
     for (const BlockRef& r : mine) owned_capacity += r.size;
     // The block being written (index into `mine`, or none yet); `used`
-    // entries of it are valid.
+    // units of it are taken.
     std::size_t k = 0;
     const BlockRef* cur = nullptr;
     std::size_t used = 0;
-    // Make the next block current, with room for at least `need` entries,
-    // carrying over the `keep` entries of the list being written. A block
-    // of this thread's that is too small is skipped (and kept for later
-    // searches); a new one holds an eighth of what the thread owns, so the
-    // spare room stays small and the count of blocks grows slowly.
-    auto next_block = [&](std::size_t need, std::size_t keep) {
-      const std::uint32_t* carry = cur ? cur->data + used - keep : nullptr;
+    // Make the next block current, with room for at least `need` units. A
+    // block of this thread's that is too small is skipped (and kept for
+    // later searches); a new one holds an eighth of what the thread owns,
+    // so the spare room stays small and the count of blocks grows slowly.
+    auto next_block = [&](std::size_t need) {
       std::size_t j = cur ? k + 1 : 0;
       while (j < mine.size() && mine[j].size < need) ++j;
       if (j == mine.size()) {
-        const std::size_t size = std::max({need, std::size_t(4096), owned_capacity / 8});
+        const std::size_t size = std::max({need, std::size_t(8192), owned_capacity / 8});
         BlockRef r{};
 #pragma omp critical(rubble_neighbor_blocks)
         {
@@ -274,12 +272,12 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
         mine.push_back(r);
         owned_capacity += size;
       }
-      if (keep > 0) std::copy(carry, carry + keep, mine[j].data);  // before `mine` can move again
       k = j;
       cur = &mine[j];
-      used = keep;
+      used = 0;
     };
-    std::vector<std::uint32_t> near;  // cells within reach of the current group
+    std::vector<std::uint32_t> near;     // cells within reach of the current group
+    std::vector<std::uint32_t> scratch;  // the list being found, in full
 
     // static: each thread takes the same run of groups in every search, so
     // its blocks are reused in the same order and their count settles
@@ -305,20 +303,16 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
       for (std::uint32_t a = g.begin; a < g.end; ++a) {
         const Vec<D> xa = xs[a];
         const Real ha = hs[a];
-        if (!cur) next_block(0, 0);
-        std::size_t first = used;
+        std::size_t found = 0;
         for (const std::uint32_t j : near) {
           const Node& m = nodes[j];
           const Real rm = std::max(ha, m.h_max);
           if (!(distance2(xa, xa, m.lo, m.hi) < rm * rm)) continue;
           // Room for the whole cell before testing it, so that the test
           // can write every candidate and advance only on a hit (no branch
-          // to mispredict); a full block passes the list so far to the next.
-          if (used + (m.end - m.begin) > cur->size) {
-            next_block((used - first) + (m.end - m.begin), used - first);
-            first = 0;
-          }
-          std::uint32_t* out_list = cur->data + used;
+          // to mispredict).
+          if (scratch.size() < found + (m.end - m.begin)) scratch.resize(2 * (found + (m.end - m.begin)));
+          std::uint32_t* out_list = scratch.data() + found;
           std::size_t hits = 0;
           // If no coordinate difference to this cell can exceed L/2, the
           // minimum image is the plain difference (what separation would
@@ -339,22 +333,42 @@ void CellList<D>::find_neighbors(NeighborLists& out) const {
               hits += (norm2(box.separation(xa, xs[b])) < r * r) & (b != a);
             }
           }
-          used += hits;
+          found += hits;
         }
-        // Ascending input index (already so when the input was in spatial order).
-        std::uint32_t* const list = cur->data + first;
-        std::uint32_t* const list_end = cur->data + used;
-        if (!std::is_sorted(list, list_end)) std::sort(list, list_end);
+        // Ascending input index (already so when the input was in spatial
+        // order), then stored as differences (NeighborLists).
+        std::uint32_t* const list = scratch.data();
+        if (!std::is_sorted(list, list + found)) std::sort(list, list + found);
         const std::uint32_t i = order[a];  // input index
-        begin[i] = std::uint32_t(first);
-        count[i] = std::uint32_t(used - first);
+        const std::size_t units = NeighborLists::encoded_units(list, found, i);
+        if (!cur || used + units > cur->size) next_block(units);
+        begin[i] = std::uint32_t(used);
+        count[i] = std::uint32_t(found);
         block_of[i] = cur->id;
+        used += NeighborLists::encode(list, found, i, cur->data + used);
       }
     }
   }
   for (int t = 0; t < threads; ++t) {
     out.thread_blocks_[t].clear();
     for (const BlockRef& r : refs[t]) out.thread_blocks_[t].push_back(r.id);
+  }
+}
+
+void NeighborLists::assign(const std::vector<std::vector<std::uint32_t>>& lists) {
+  const std::size_t n = lists.size();
+  begin_.assign(n, 0);
+  count_.assign(n, 0);
+  block_.assign(n, 0);
+  std::size_t units = 0;
+  for (std::size_t i = 0; i < n; ++i) units += encoded_units(lists[i].data(), lists[i].size(), std::uint32_t(i));
+  blocks_.assign(1, std::vector<std::uint16_t>(units));
+  thread_blocks_.clear();
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    begin_[i] = std::uint32_t(used);
+    count_[i] = std::uint32_t(lists[i].size());
+    used += encode(lists[i].data(), lists[i].size(), std::uint32_t(i), blocks_[0].data() + used);
   }
 }
 

@@ -155,9 +155,7 @@ struct ListNeighbors {
   std::uint32_t a;
   template <class F>
   void operator()(F&& f) const {
-    const std::uint32_t* list = nbrs.list(a);
-    const std::size_t count = nbrs.count(a);
-    for (std::size_t k = 0; k < count; ++k) f(list[k]);
+    nbrs.for_each(a, f);
   }
 };
 

@@ -318,7 +318,9 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
   // neighbours within the search radius kSearchSkin h (h = hfact spacings)
   const double r = kSearchSkin * hfact, pi = std::numbers::pi;
   const double neighbours = D == 1 ? 2 * r : D == 2 ? pi * r * r : 4 * pi / 3 * r * r * r;
-  const std::size_t lists = std::size_t(4 * neighbours) + 4;
+  // two bytes per entry (NeighborLists: 16-bit differences), an eighth
+  // spare in the blocks, and the per-particle index (begin, count, block)
+  const std::size_t lists = std::size_t(2 * 1.125 * neighbours) + 3 * sizeof(std::uint32_t);
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
   return store + integrator + snapshot + lists + cells;
 }
@@ -393,13 +395,12 @@ void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::ve
   cells.find_neighbors(nb);
   auto body_of = [&](std::size_t i) { return body_of_id(body_first, ps.id[i]); };
   for (std::size_t a = 0; a < n; ++a)
-    for (std::size_t j = 0; j < nb.count(a); ++j) {
-      const std::size_t b = nb.list(a)[j];
-      if (b <= a) continue;
+    nb.for_each(a, [&](std::size_t b) {
+      if (b <= a) return;
       const std::size_t ka = body_of(a), kb = body_of(b);
-      if (ka == kb) continue;
+      if (ka == kb) return;
       const Real r = norm(domain.separation(ps.x[a], ps.x[b]));
-      if (!(r < std::min(reach[a], reach[b]))) continue;
+      if (!(r < std::min(reach[a], reach[b]))) return;
       const std::size_t first = std::min(ka, kb), second = std::max(ka, kb);
       throw InputError(scene.file, "bodies[" + std::to_string(second) + "]",
                        "overlaps bodies[" + std::to_string(first) + "]: particles " +
@@ -407,7 +408,7 @@ void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::ve
                            std::to_string(ps.id[b] - body_first[kb]) + " of bodies[" + std::to_string(kb) + "] are " +
                            fmt_g(r) + " m apart, less than half their spacing; move the bodies apart, or set "
                            "simulation.allow_overlap = true if they are meant to overlap");
-    }
+    });
 }
 
 template <int D>

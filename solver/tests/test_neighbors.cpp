@@ -582,11 +582,12 @@ TYPED_TEST(NeighborsTest, DeterministicAcrossThreadCounts) {
 }
 
 // The lists' memory (issue #14): searching again reuses the blocks (no new
-// one), the result is the same, and what is held stays within an eighth of
-// the entries (the growth of a thread's blocks), each thread's first
-// 4096-entry block, the end of each block that could not take a whole list
-// and cell, and the 12 bytes of index per particle (no second copy of the
-// lists).
+// one), the result is the same; particles in spatial order (as the run keeps
+// them) need few escapes, so the lists take about two bytes per entry; and
+// what is held stays within an eighth of the units (the growth of a thread's
+// blocks), each thread's first 8192-unit block, the end of each block that
+// could not take a whole list, and the 12 bytes of index per particle (no
+// second copy of the lists).
 TYPED_TEST(NeighborsTest, RepeatedSearchesReuseTheBuffers) {
   constexpr int D = TypeParam::value;
   // uniform random positions, one H (about 12 / 28 / 58 neighbours in 1-D / 2-D / 3-D)
@@ -597,6 +598,10 @@ TYPED_TEST(NeighborsTest, RepeatedSearchesReuseTheBuffers) {
     s.x.push_back(uniform_point(s.box, rng));
     s.H.push_back(H);
   }
+  const auto perm = spatial_sort_permutation<D>(s.x.data(), s.x.size(), s.box);
+  std::vector<Vec<D>> sorted(s.x.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) sorted[i] = s.x[perm[i]];
+  s.x = sorted;
   CellList<D> cells;
   cells.build(s.x.data(), s.H.data(), s.x.size(), s.box);
   NeighborLists nl;
@@ -611,12 +616,50 @@ TYPED_TEST(NeighborsTest, RepeatedSearchesReuseTheBuffers) {
 #else
   const double threads = 1;
 #endif
-  const double entries = double(nl.total());
+  const double entries = double(nl.total()), units = double(nl.units());
   EXPECT_GT(entries, 10.0 * double(s.x.size()));
+  // escapes (3 units) for at most 5 % of the entries in spatial order
+  EXPECT_LE(units, 1.10 * entries);
   std::size_t longest = 0;
   for (std::size_t i = 0; i < nl.size(); ++i) longest = std::max(longest, nl.count(i));
-  EXPECT_LE(double(nl.bytes()), 4 * (1.125 * entries + threads * 4096 + double(blocks) * (double(longest) + 32)) +
+  EXPECT_LE(double(nl.bytes()), 2 * (1.125 * units + threads * 8192 + double(blocks) * (3.0 * double(longest))) +
                                     12.0 * double(s.x.size()));
+}
+
+// The 16-bit difference encoding round-trips any list of indices: lists
+// below and above their owner, differences at the edges of the 16-bit
+// range, jumps that need escapes, indices near 2^32, unordered lists,
+// duplicates, the owner itself, empty lists.
+TEST(NeighborListsEncoding, AnyListRoundTrips) {
+  const std::uint32_t big = 0xFFFFFFF0u;
+  std::vector<std::vector<std::uint32_t>> lists = {
+      {},                                          // particle 0: empty
+      {0, 2, 3, 65538, 65539, 131075, big},        // 1: step 65535 (direct) and 65536 (escape)
+      {2, 3},                                      // 2: the owner itself (escape), then +1 from it
+      {},                                          // 3
+      {7, 5, 6, 6, 4},                             // 4: unordered and duplicates
+  };
+  lists.push_back({0, 1});  // 5: first entry below the owner (zigzag 9)
+  std::vector<std::uint32_t> far;
+  for (std::uint32_t j = 0; j < 200; ++j) far.push_back(40000 + 32767 + j * 300);  // first: zigzag 65534
+  lists.resize(40001);
+  lists[40000] = far;
+  lists[39999] = {39999 - 32768, 39999 + 32768};  // zigzag 65535 (direct), then 65536 (escape)
+  lists[39998] = {39998 + 32768};                 // zigzag 65536: escape
+  NeighborLists nl;
+  nl.assign(lists);
+  ASSERT_EQ(nl.size(), lists.size());
+  std::size_t entries = 0;
+  for (std::size_t i = 0; i < lists.size(); ++i) {
+    ASSERT_EQ(nl.count(i), lists[i].size()) << "particle " << i;
+    ASSERT_EQ(nl.copy(i), lists[i]) << "particle " << i;
+    entries += lists[i].size();
+  }
+  EXPECT_EQ(nl.total(), entries);
+  // escapes, counted by hand: particle 1: the step of 65536 and the jump
+  // to big (2); 2: the owner (1); 4: 5 < 7, 6 == 6, 4 < 6 (3); 5 and
+  // 40000: none; 39999: the step of 65536 (1); 39998: zigzag 65536 (1)
+  EXPECT_EQ(nl.units(), entries + 2 * (2 + 1 + 3 + 1 + 1));
 }
 
 TYPED_TEST(NeighborsTest, RejectsBadInput) {
