@@ -33,6 +33,9 @@ What the Phantom run is set to, and why (to match rubble's Sedov rung):
     in build/Makefile_setups sets IND_TIMESTEPS=yes; a command-line make
     variable overrides it).
   * C_cour = 0.3, C_force = 0.25 (Phantom's defaults, written explicitly).
+  * tolh = TOLH = 1e-4, the relative tolerance of the h-rho iteration
+    (Phantom's default, written explicitly; rubble's matching key is
+    simulation.h_tolerance, which sedov_vs_phantom.py sets to the same).
   * dtmax = tmax and nfulldump = 1, so the only dumps are the t = 0 one and
     a full dump at the end (tmax or nmax steps); dtmax also caps the step
     and Phantom shortens the last step to land on tmax exactly.
@@ -71,6 +74,10 @@ MAKE_VARS = {"SETUP": "sedov", "SYSTEM": "gfortran", "IND_TIMESTEPS": "no", "OPE
 # --------------------------------------------------------------------------
 # build
 # --------------------------------------------------------------------------
+# Relative tolerance of the h-rho iteration, Phantom's default tolh (its
+# sedov.in); rubble runs with simulation.h_tolerance at the same value.
+TOLH = 1e-4
+
 def build(phantom_src_dir=DEFAULT_SRC, build_dir=DEFAULT_BUILD, jobs=1, force=False):
     """Build ``phantom`` and ``phantomsetup`` for the sedov setup.
 
@@ -223,6 +230,7 @@ def run_sedov(build_paths, workdir, npartx, tmax=None, nmax=None, threads=2,
         "alphamax": 1.0,
         "beta": 2.0,
         "alphau": 1.0,
+        "tolh": TOLH,
     }
     if viscosity not in ("fixed", "switch"):
         raise ValueError("viscosity must be 'fixed' or 'switch'")

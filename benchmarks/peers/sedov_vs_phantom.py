@@ -26,8 +26,9 @@ other, with the same number of OpenMP threads:
 Matched: M4 cubic spline with h = 1.2 dx (rubble: support 2.4 dx), ~58
 neighbours, summation density with grad-h terms, artificial viscosity fixed
 at alpha = 1, beta = 2, artificial conductivity alpha_u = 1, global time
-steps with Courant number 0.3, the blast energy spread by the cubic spline
-of support 4.8 dx, ambient u = 0. Phantom's force step factor C_force = 0.25
+steps with Courant number 0.3, the h-rho iteration stopped at a relative
+change of 1e-4 (Phantom's tolh; rubble's simulation.h_tolerance), the blast
+energy spread by the cubic spline of support 4.8 dx, ambient u = 0. Phantom's force step factor C_force = 0.25
 is its default; rubble's force_factor is its own default (docs/scene.md).
 
 The table is printed and written to OUT/sedov_vs_phantom.md with the JSON
@@ -51,6 +52,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(HERE))
+from phantom import TOLH  # noqa: E402  (the h-rho tolerance both codes run with)
 
 SCENE = REPO / "verification" / "sedov_taylor" / "sedov_3d.toml"
 
@@ -81,7 +83,8 @@ def run_rubble(rubble, rung, n, workdir, threads, end_time=None, measure_it=True
     wd = Path(workdir)
     wd.mkdir(parents=True, exist_ok=True)
     dx = 1.0 / n
-    sets = [f"bodies.0.spacing={dx!r}", f"energy_deposits.0.radius={4.8 * dx!r}", "output.interval=0"]
+    sets = [f"bodies.0.spacing={dx!r}", f"energy_deposits.0.radius={4.8 * dx!r}", "output.interval=0",
+            f"simulation.h_tolerance={TOLH!r}"]
     if end_time is not None:
         sets.append(f"simulation.end_time={end_time!r}")
     out = wd / "out"

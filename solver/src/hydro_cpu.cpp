@@ -109,6 +109,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
                                               : kernel_default_hfact(scene.simulation.kernel))),
       courant_(Real(scene.simulation.courant)),
       force_factor_(Real(scene.simulation.force_factor)),
+      h_tolerance_(h_iteration_tolerance(scene.simulation.h_tolerance)),
       summation_(scene.simulation.density == DensityForm::Summation),
       gravity_(scene.gravity, scene.simulation.kernel) {
   if (gravity_.enabled() && (D != 3 || ps_.a_grav.size() != ps_.n || ps_.phi.size() != ps_.n))
@@ -173,6 +174,7 @@ RhsContext<D> HydroCpu<D>::context() {
   c.xsph_epsilon = xsph_epsilon_;
   c.courant = courant_;
   c.force_factor = force_factor_;
+  c.h_tolerance = h_tolerance_;
   c.body_force = g_;
   c.has_body_force = body_force_;
   return c;

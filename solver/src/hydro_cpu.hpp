@@ -89,7 +89,7 @@ class HydroCpu {
   std::vector<MaterialParams> materials_;
   KernelType kernel_;
   Real hfact_;
-  Real courant_, force_factor_;
+  Real courant_, force_factor_, h_tolerance_;
   bool summation_;
   CellList<D> cells_;
   NeighborLists nbrs_;

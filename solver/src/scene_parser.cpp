@@ -396,7 +396,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
+              "h_tolerance", "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
               "kernel_correction", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
@@ -428,6 +428,10 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (auto x = number(*t, "force_factor", p)) {
     require(*x > 0 && *x <= 1, *t, "force_factor", p, *x, "in (0, 1]");
     s.force_factor = *x;
+  }
+  if (auto x = number(*t, "h_tolerance", p)) {
+    require(*x >= 0 && *x <= 0.01, *t, "h_tolerance", p, *x, "in [0, 0.01] (0 = the default)");
+    s.h_tolerance = *x;
   }
   if (auto x = number(*t, "rk2_tolerance", p)) {
     require(*x > 0, *t, "rk2_tolerance", p, *x, "> 0");

@@ -2,10 +2,13 @@
 // equilibrium is kept, and the discrete conservation laws hold.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/particle_rates.hpp"
+#include "rubble/physics/kernels.hpp"
 #include "rubble/run.hpp"
 
 using namespace rubble;
@@ -151,5 +154,28 @@ TEST(Run, DtMinIsEnforcedWhateverTheOutputInterval) {
     const std::string coarse = uniform_gas_scene(1, integrator, "summation", "cubic");
     EXPECT_THROW(run_scene(parse_scene(coarse, "t.toml", {"simulation.dt_min=0.02"}), in_memory()), RunError)
         << integrator;
+  }
+}
+
+// simulation.h_tolerance: the smoothing-length iteration stops when a
+// Newton step moves h by at most that fraction of h, so every particle's
+// final (h, rho) pair satisfies h = hfact (m/rho)^(1/D) to about the
+// tolerance (the next step is the remaining error, Newton's convergence
+// being quadratic): checked at Phantom's 1e-4 and at the default 1e-10 on
+// the Sod tube, whose shock and rarefaction move h every step.
+TEST(Run, SmoothingLengthIterationStopsAtItsTolerance) {
+  const std::string path = std::string(RUBBLE_SOURCE_DIR) + "/verification/sod_shock_tube/sod_1d.toml";
+  for (const double tol : {1e-4, 0.0}) {
+    const Scene s = load_scene_file(path, {"bodies.0.spacing=0.0125", "bodies.1.spacing=0.1",
+                                           "simulation.integrator=\"leapfrog\"", "simulation.end_time=0.05",
+                                           "simulation.h_tolerance=" + std::to_string(tol)});
+    const FinalState fs = run_scene(s, in_memory());
+    const double hfact = s.simulation.hfact > 0 ? s.simulation.hfact : kernel_default_hfact(s.simulation.kernel);
+    const double bound = 2 * (tol > 0 ? tol : double(h_iteration_tolerance(0)));
+    double worst = 0;
+    for (std::size_t i = 0; i < fs.h.size(); ++i)
+      worst = std::max(worst, std::fabs(fs.h[i] / (hfact * fs.m[i] / fs.rho[i]) - 1));
+    EXPECT_LE(worst, bound) << "h_tolerance " << tol;
+    EXPECT_GT(fs.steps, 10);
   }
 }

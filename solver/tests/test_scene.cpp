@@ -69,6 +69,7 @@ TEST(Scene, MinimalSceneGetsDefaults) {
   EXPECT_EQ(s.simulation.hfact, 0.0);
   EXPECT_DOUBLE_EQ(s.simulation.courant, 0.3);
   EXPECT_DOUBLE_EQ(s.simulation.force_factor, 0.25);
+  EXPECT_EQ(s.simulation.h_tolerance, 0.0);
   EXPECT_DOUBLE_EQ(s.simulation.rk2_tolerance, 1e-5);
   EXPECT_EQ(s.simulation.dt_initial, 0.0);
   EXPECT_DOUBLE_EQ(s.simulation.dt_min, 1e-12 * 0.2);
@@ -114,6 +115,7 @@ density = "continuity"
 hfact = 2.4
 courant = 0.2
 force_factor = 0.5
+h_tolerance = 1e-4
 rk2_tolerance = 1e-6
 dt_initial = 1e-4
 dt_min = 1e-9
@@ -168,6 +170,7 @@ snapshots = false
   EXPECT_EQ(s.simulation.hfact, 2.4);
   EXPECT_EQ(s.simulation.courant, 0.2);
   EXPECT_EQ(s.simulation.force_factor, 0.5);
+  EXPECT_EQ(s.simulation.h_tolerance, 1e-4);
   EXPECT_EQ(s.simulation.rk2_tolerance, 1e-6);
   EXPECT_EQ(s.simulation.dt_initial, 1e-4);
   EXPECT_EQ(s.simulation.dt_min, 1e-9);
@@ -277,6 +280,13 @@ TEST(Scene, MaxNotAboveMin) {
 TEST(Scene, NonPositiveEndTimeAndSpacing) {
   expect_error(edit(kMinimal, "end_time = 0.2", "end_time = 0"), "simulation.end_time", "must be > 0");
   expect_error(edit(kMinimal, "spacing = 0.01", "spacing = -0.01"), "bodies[0].spacing", "must be > 0");
+}
+
+TEST(Scene, HToleranceOutsideItsRange) {
+  expect_error(edit(kMinimal, "end_time = 0.2", "end_time = 0.2\nh_tolerance = -1e-6"), "simulation.h_tolerance",
+               "in [0, 0.01]");
+  expect_error(edit(kMinimal, "end_time = 0.2", "end_time = 0.2\nh_tolerance = 0.1"), "simulation.h_tolerance",
+               "in [0, 0.01]");
 }
 
 TEST(Scene, UnknownMaterialName) {

@@ -728,7 +728,7 @@ struct CudaStepper<D>::Impl {
   DeviceBuffer scratch;
   CachingDeviceAllocator temp;  // temporary storage of the sorts and reductions
   KernelType kernel;
-  Real hfact, courant, force_factor, xsph_epsilon, shifting;
+  Real hfact, courant, force_factor, h_tolerance, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
   bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
@@ -772,6 +772,7 @@ struct CudaStepper<D>::Impl {
         hfact(Real(scene.simulation.hfact > 0 ? scene.simulation.hfact : kernel_default_hfact(scene.simulation.kernel))),
         courant(Real(scene.simulation.courant)),
         force_factor(Real(scene.simulation.force_factor)),
+        h_tolerance(h_iteration_tolerance(scene.simulation.h_tolerance)),
         xsph_epsilon(Real(scene.simulation.xsph)),
         shifting(Real(scene.simulation.shifting)),
         summation(scene.simulation.density == DensityForm::Summation),
@@ -824,6 +825,7 @@ struct CudaStepper<D>::Impl {
     c.xsph_epsilon = xsph_epsilon;
     c.courant = courant;
     c.force_factor = force_factor;
+    c.h_tolerance = h_tolerance;
     c.body_force = g;
     c.has_body_force = body_force;
     return c;

@@ -45,6 +45,8 @@ struct RhsContext {
   Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
   Real xsph_epsilon = 0;
   Real courant = 0, force_factor = 0;
+  // summation density: |dh|/h of the Newton iteration (h_iteration_tolerance)
+  Real h_tolerance = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
   Vec<D> body_force = Vec<D>::zero();  // uniform external acceleration (simulation.gravity)
   bool has_body_force = false;
 };
@@ -139,8 +141,19 @@ RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t 
   return out;
 }
 
+// The relative tolerance |dh|/h of the smoothing-length iteration for
+// simulation.h_tolerance (0: the precision's default, 1e-10 in double and
+// 1e-5 in single precision; a value below 100 units of rounding of the
+// precision is raised to that, where the iteration could never settle).
+inline Real h_iteration_tolerance(double scene_value) {
+  const double floor = 100 * double(std::numeric_limits<Real>::epsilon());
+  if (scene_value <= 0) return sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  return Real(scene_value > floor ? scene_value : floor);
+}
+
 // Summation density with h and rho solved together by Newton's method
-// (smoothing_length.hpp), starting from the stored h. Writes h, rho and
+// (smoothing_length.hpp), starting from the stored h, until one step moves
+// h by at most c.h_tolerance of itself. Writes h, rho and
 // Omega of particle a and returns true, or, when h grows past the search
 // radius (the neighbours listed do not cover the new support), writes only
 // the grown h and returns false: the driver then rebuilds with a larger radius.
@@ -149,7 +162,7 @@ RUBBLE_HD_INLINE bool summation_density_particle(const RhsContext<D>& c, std::ui
                                                  Each&& each) {
   const StoreView<D>& s = c.s;
   constexpr int kMaxNewton = 50;
-  const Real tol = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  const Real tol = c.h_tolerance;
   Real h = s.h[a] < search_radius ? s.h[a] : search_radius;
   for (int it = 0; it < kMaxNewton; ++it) {
     const DensitySums d = density_sums<D>(c, a, h, each);

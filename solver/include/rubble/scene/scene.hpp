@@ -27,6 +27,9 @@ struct SimulationConfig {
   double hfact = 0;                         // h = hfact * (m/rho)^(1/D); 0 = kernel default
   double courant = 0.3;                     // Courant factor C
   double force_factor = 0.25;               // dt <= force_factor * sqrt(h/|a|)
+  // Summation density: relative tolerance of the smoothing-length Newton
+  // iteration (|dh|/h); 0 = the precision's default (1e-10 double, 1e-5 float)
+  double h_tolerance = 0;
   double rk2_tolerance = 1e-5;              // relative error per step (rk2_adaptive)
   double dt_initial = 0;                    // 0 = from the Courant limit
   double dt_min = 0;                        // a step below this stops the run; 0 = 1e-12 * end_time
