@@ -131,10 +131,13 @@ RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t 
   const KernelAt<D> K = kernel_at<D>(c.kernel, h);
   const KernelWDwdh self = kernel_w_dwdh<D>(K, Real(0));
   DensitySums out{s.m[a] * self.w, s.m[a] * self.dwdh};
+  const Real h2 = h * h;
   each([&](std::uint32_t b) {
-    const Real r = norm(c.domain.separation(s.x[a], s.x[b]));
-    if (r >= h) return;
-    const KernelWDwdh w = kernel_w_dwdh<D>(K, r);
+    // the lists hold neighbours a little beyond the support (the search
+    // radius' skin): those stop here, before the square root
+    const Real r2 = norm2(c.domain.separation(s.x[a], s.x[b]));
+    if (r2 >= h2) return;
+    const KernelWDwdh w = kernel_w_dwdh<D>(K, std::sqrt(r2));
     out.rho += s.m[b] * w.w;
     out.dwdh += s.m[b] * w.dwdh;
   });
@@ -390,10 +393,14 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
+    // A listed neighbour outside both supports (the search skin) adds
+    // nothing: skip it before b's side (two divisions) is prepared.
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real h_max = pa.q.h > s.h[b] ? pa.q.h : s.h[b];
+    if (norm2(dx) >= h_max * h_max) return;
     HydroParticle<D> pb = hydro_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
-    const HydroPairRates<D> r =
-        hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true), c.domain.separation(s.x[a], s.x[b]), !c.summation);
+    const HydroPairRates<D> r = hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true), dx, !c.summation);
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;
