@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/physics/artificial_conductivity.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/hydro.hpp"
 #include "rubble/physics/smoothing_length.hpp"
@@ -55,6 +56,25 @@ TEST(ArtificialViscosity, ActsOnlyOnApproachingPairs) {
   // Pi = (-alpha c mu + beta mu^2)/rho > 0 for mu < 0
   EXPECT_NEAR(viscosity_pi(av, mu, 1.5, 2.0), (-1.0 * 1.5 * mu + 2.0 * mu * mu) / 2.0, 10 * kEps);
   EXPECT_GT(viscosity_pi(av, mu, 1.5, 2.0), 0.0);
+}
+
+// Price (2008) conductivity: v_sig^u = sqrt(|p_a - p_b|/rhobar), zero
+// between equal pressures (a contact in pressure equilibrium is where it
+// must act on u alone through the other pairs, and a uniform gas gets
+// none); the pair term carries heat from the hotter particle to the colder
+// (F_ab <= 0, so du_a/dt < 0 when u_a > u_b), is antisymmetric in (a, b),
+// and is linear in alpha_u and in u_a - u_b.
+TEST(ArtificialConductivity, SignalSpeedAndDirectionOfHeatFlow) {
+  EXPECT_NEAR(conductivity_signal_speed(3.0, 1.0, 0.5), 2.0, 10 * kEps);
+  EXPECT_NEAR(conductivity_signal_speed(1.0, 3.0, 0.5), 2.0, 10 * kEps);
+  EXPECT_EQ(conductivity_signal_speed(2.0, 2.0, 0.5), 0.0);
+  const double F = -0.7, rhobar = 1.3, vsig = 0.9;
+  const double hot_to_cold = conductivity_dudt(1.0, vsig, 5.0, 2.0, rhobar, F);
+  EXPECT_LT(hot_to_cold, 0.0);
+  EXPECT_NEAR(hot_to_cold, 1.0 * vsig * 3.0 / rhobar * F, 10 * kEps);
+  EXPECT_NEAR(conductivity_dudt(1.0, vsig, 2.0, 5.0, rhobar, F), -hot_to_cold, 10 * kEps);  // antisymmetric
+  EXPECT_NEAR(conductivity_dudt(0.5, vsig, 5.0, 2.0, rhobar, F), 0.5 * hot_to_cold, 10 * kEps);
+  EXPECT_EQ(conductivity_dudt(1.0, vsig, 2.0, 2.0, rhobar, F), 0.0);
 }
 
 TEST(SmoothingLength, DensityAndHAreInverse) {
