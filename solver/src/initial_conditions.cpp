@@ -311,7 +311,7 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
           const auto& arr = one.*member;
           if (arr.empty()) return;
           store += sizeof(arr[0]);
-          if (f.snapshot) snapshot += sizeof(arr[0]);
+          if (f.snapshot && f.role != FieldRole::Constant) snapshot += sizeof(arr[0]);  // the last good state
         },
         f.member);
   const std::size_t integrator = scene.simulation.integrator == Integrator::RK2Adaptive ? 2 * store : store / 2;

@@ -381,6 +381,24 @@ TEST_F(Cli, FailedStepNamesTheParticleAndKeepsTheLastGoodState) {
   const rubble::SnapshotMeta failed = rubble::read_snapshot_meta((dir_ / "out" / "split" / "snapshot.failed.h5").string());
   EXPECT_EQ(failed.step, 0);
   EXPECT_FALSE(failed.restartable) << "a diagnostic is not a restart point";
+  // The last good state is the state at step 0, as the first snapshot wrote
+  // it: the fields a step changes (copied before the step) and the constant
+  // ones (taken from the store when the state is written) alike.
+  rubble::ParticleStore<1> good, first;
+  rubble::SnapshotMeta meta;
+  rubble::read_snapshot<1>((dir_ / "out" / "split" / "snapshot.failed.h5").string(), good, meta);
+  rubble::read_snapshot<1>((dir_ / "out" / "split" / "snapshot.0000.h5").string(), first, meta);
+  ASSERT_EQ(good.n, first.n);
+  ASSERT_GT(good.n, 0u);
+  for (std::size_t i = 0; i < good.n; ++i) {
+    EXPECT_EQ(good.x[i][0], first.x[i][0]) << i;
+    EXPECT_EQ(good.v[i][0], first.v[i][0]) << i;
+    EXPECT_EQ(good.rho[i], first.rho[i]) << i;
+    EXPECT_EQ(good.u[i], first.u[i]) << i;
+    EXPECT_EQ(good.m[i], first.m[i]) << i;
+    EXPECT_EQ(good.id[i], first.id[i]) << i;
+    EXPECT_EQ(good.material_id[i], first.material_id[i]) << i;
+  }
 }
 
 // An unknown command names the word (issue #13 item 7).
