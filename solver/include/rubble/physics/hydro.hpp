@@ -73,6 +73,93 @@ RUBBLE_HD_INLINE HydroSide<D> hydro_side(KernelType kernel, const HydroParticle<
                       neighbour ? Real(0) : Real(1) / q.omega};
 }
 
+// What a pair's two sides share: the kernel gradients, the velocity
+// difference and the viscous and conductive factors. dx = x_a - x_b
+// (minimum image); `active` is false outside both supports (and for r = 0),
+// where the pair adds nothing.
+template <int D>
+struct HydroPairTerms {
+  bool active;
+  Vec<D> g_a, g_b, gbar;  // grad_a W(r, h_a), grad_a W(r, h_b), their mean (all gbar when `symmetric`)
+  Vec<D> dv;              // v_a - v_b
+  Real mu, pi_ab;         // Monaghan's mu_ab and Pi_ab
+  Real alpha_u, vsig_u, rhobar, F_ab;  // conductivity (alpha_u = 0: off)
+};
+
+template <int D>
+RUBBLE_HD_INLINE HydroPairTerms<D> hydro_pair_terms(const HydroSide<D>& sa, const HydroSide<D>& sb, const Vec<D>& dx,
+                                                    bool symmetric = false) {
+  const HydroParticle<D>& a = sa.q;
+  const HydroParticle<D>& b = sb.q;
+  HydroPairTerms<D> t{};
+  t.active = false;
+  const Real r2 = norm2(dx);
+  const Real h_max = a.h > b.h ? a.h : b.h;
+  if (r2 >= h_max * h_max) return t;  // most entries beyond the support stop here, before the root
+  const Real r = std::sqrt(r2);
+  if (r <= Real(0)) return t;
+  if (r >= a.h && r >= b.h) return t;
+  t.active = true;
+  const Real inv_r = Real(1) / r;
+
+  t.g_a = kernel_grad<D>(sa.K, dx, r, inv_r);
+  t.g_b = kernel_grad<D>(sb.K, dx, r, inv_r);
+  t.gbar = Real(0.5) * (t.g_a + t.g_b);
+  if (symmetric) t.g_a = t.g_b = t.gbar;
+  t.dv = a.v - b.v;
+
+  // Monaghan viscosity with pair-mean coefficients.
+  const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
+  const Real hbar = monaghan_h<D>(sa.K.k, Real(0.5) * (a.h + b.h));
+  t.mu = viscosity_mu(dot(t.dv, dx), r2, hbar);
+  t.rhobar = Real(0.5) * (a.rho + b.rho);
+  t.pi_ab = (t.mu < Real(0)) ? viscosity_pi(av, t.mu, Real(0.5) * (a.cs + b.cs), t.rhobar) : Real(0);
+
+  t.alpha_u = Real(0.5) * (a.alpha_u + b.alpha_u);
+  if (t.alpha_u > Real(0)) {
+    t.F_ab = dot(t.gbar, dx) * inv_r;  // gbar = xhat F_ab
+    t.vsig_u = conductivity_signal_speed(a.p, b.p, t.rhobar);
+  }
+  return t;
+}
+
+// Particle a's rates from the pair's terms (a's side of the equations above).
+template <int D>
+RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair_rates_a(const HydroPairTerms<D>& t, const HydroSide<D>& sa,
+                                                      const HydroSide<D>& sb) {
+  HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+  if (!t.active) return out;
+  const Real dv_ga = dot(t.dv, t.g_a);
+  out.dvdt = sb.q.m * (pressure_acceleration<D>(sa.f, sb.f, t.g_a, t.g_b) - t.pi_ab * t.gbar);
+  out.dudt = sb.q.m * (sa.f * dv_ga + Real(0.5) * t.pi_ab * dot(t.dv, t.gbar));
+  out.drhodt = sb.q.m * dv_ga * sa.inv_omega;
+  out.mu = -t.mu;
+  if (t.alpha_u > Real(0))
+    out.dudt += sb.q.m * conductivity_dudt(t.alpha_u, t.vsig_u, sa.q.u, sb.q.u, t.rhobar, t.F_ab);
+  return out;
+}
+
+// Particle b's rates from the same terms: what hydro_pair_rates_a gives for
+// the pair seen from b (dx -> -dx, so every gradient and dv change sign and
+// g_a, g_b swap), term for term the same floating-point operations, so a
+// loop that computes each pair once gets the numbers of one that computes
+// it from both sides. b's side needs its 1/Omega (continuity density).
+template <int D>
+RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair_rates_b(const HydroPairTerms<D>& t, const HydroSide<D>& sa,
+                                                      const HydroSide<D>& sb) {
+  HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+  if (!t.active) return out;
+  const Vec<D> g_a = -t.g_b, g_b = -t.g_a, gbar = -t.gbar, dv = -t.dv;  // seen from b
+  const Real dv_ga = dot(dv, g_a);
+  out.dvdt = sa.q.m * (pressure_acceleration<D>(sb.f, sa.f, g_a, g_b) - t.pi_ab * gbar);
+  out.dudt = sa.q.m * (sb.f * dv_ga + Real(0.5) * t.pi_ab * dot(dv, gbar));
+  out.drhodt = sa.q.m * dv_ga * sb.inv_omega;
+  out.mu = -t.mu;
+  if (t.alpha_u > Real(0))
+    out.dudt += sa.q.m * conductivity_dudt(t.alpha_u, t.vsig_u, sb.q.u, sa.q.u, t.rhobar, t.F_ab);
+  return out;
+}
+
 // The complete hydrodynamic interaction of b on a; dx = x_a - x_b (minimum
 // image). Both backends loop over neighbours and add these up.
 // Material coefficients of a pair are the arithmetic means of the two
@@ -80,43 +167,7 @@ RUBBLE_HD_INLINE HydroSide<D> hydro_side(KernelType kernel, const HydroParticle<
 template <int D>
 RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(const HydroSide<D>& sa, const HydroSide<D>& sb, const Vec<D>& dx,
                                               bool symmetric = false) {
-  const HydroParticle<D>& a = sa.q;
-  const HydroParticle<D>& b = sb.q;
-  HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
-  const Real r2 = norm2(dx);
-  const Real h_max = a.h > b.h ? a.h : b.h;
-  if (r2 >= h_max * h_max) return out;  // most entries beyond the support stop here, before the root
-  const Real r = std::sqrt(r2);
-  if (r <= Real(0)) return out;
-  if (r >= a.h && r >= b.h) return out;
-  const Real inv_r = Real(1) / r;
-
-  Vec<D> g_a = kernel_grad<D>(sa.K, dx, r, inv_r);
-  Vec<D> g_b = kernel_grad<D>(sb.K, dx, r, inv_r);
-  const Vec<D> gbar = Real(0.5) * (g_a + g_b);
-  if (symmetric) g_a = g_b = gbar;
-  const Vec<D> dv = a.v - b.v;
-
-  // Monaghan viscosity with pair-mean coefficients.
-  const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
-  const Real hbar = monaghan_h<D>(sa.K.k, Real(0.5) * (a.h + b.h));
-  const Real mu = viscosity_mu(dot(dv, dx), r2, hbar);
-  const Real rhobar = Real(0.5) * (a.rho + b.rho);
-  const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
-
-  const Real dv_ga = dot(dv, g_a);
-  out.dvdt = b.m * (pressure_acceleration<D>(sa.f, sb.f, g_a, g_b) - pi_ab * gbar);
-  out.dudt = b.m * (sa.f * dv_ga + Real(0.5) * pi_ab * dot(dv, gbar));
-  out.drhodt = b.m * dv_ga * sa.inv_omega;
-  out.mu = -mu;
-
-  const Real alpha_u = Real(0.5) * (a.alpha_u + b.alpha_u);
-  if (alpha_u > Real(0)) {
-    const Real F_ab = dot(gbar, dx) * inv_r;  // gbar = xhat F_ab
-    const Real vsig_u = conductivity_signal_speed(a.p, b.p, rhobar);
-    out.dudt += b.m * conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
-  }
-  return out;
+  return hydro_pair_rates_a<D>(hydro_pair_terms<D>(sa, sb, dx, symmetric), sa, sb);
 }
 
 // The same for two particles not prepared beforehand (tests, single pairs).
