@@ -127,27 +127,34 @@ TEST(Timestep, CourantAndForceLimits) {
 // pairs, the pair interaction must conserve linear momentum and total
 // (kinetic + thermal) energy to round-off, whatever the states are, because
 // the pair force is antisymmetric and du/dt is the matching work term.
+// A particle with a random state in the unit box (ideal gas, gamma 1.4),
+// h in [h_min, h_min + 0.4).
+template <int D>
+HydroParticle<D> random_particle(std::mt19937& gen, bool conductivity, double h_min) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  HydroParticle<D> p{};
+  for (int k = 0; k < D; ++k) {
+    p.x[k] = U(gen);
+    p.v[k] = U(gen) - 0.5;
+  }
+  p.m = 0.5 + U(gen);
+  p.rho = 0.5 + U(gen);
+  p.u = 1 + U(gen);
+  p.p = 0.4 * p.rho * p.u;
+  p.h = h_min + 0.4 * U(gen);
+  p.omega = 0.8 + 0.4 * U(gen);
+  p.cs = std::sqrt(1.4 * 0.4 * p.u);
+  p.av = {Real(0.5 + U(gen)), Real(1.0 + U(gen))};
+  p.alpha_u = conductivity ? 0.5 + U(gen) : 0.0;
+  return p;
+}
+
 template <int D>
 void check_pair_conservation(bool conductivity) {
   std::mt19937 gen(42 + D);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
   const int n = 60;
   std::vector<HydroParticle<D>> P(n);
-  for (auto& p : P) {
-    for (int k = 0; k < D; ++k) {
-      p.x[k] = U(gen);
-      p.v[k] = U(gen) - 0.5;
-    }
-    p.m = 0.5 + U(gen);
-    p.rho = 0.5 + U(gen);
-    p.u = 1 + U(gen);
-    p.p = 0.4 * p.rho * p.u;
-    p.h = 0.3 + 0.4 * U(gen);
-    p.omega = 0.8 + 0.4 * U(gen);
-    p.cs = std::sqrt(1.4 * 0.4 * p.u);
-    p.av = {Real(0.5 + U(gen)), Real(1.0 + U(gen))};
-    p.alpha_u = conductivity ? 0.5 + U(gen) : 0.0;
-  }
+  for (auto& p : P) p = random_particle<D>(gen, conductivity, 0.3);
   Vec<D> momentum = Vec<D>::zero();
   double energy = 0, scale = 0;
   for (int a = 0; a < n; ++a) {
@@ -180,24 +187,7 @@ TEST(HydroPair, ConservesMomentumAndEnergy3D) { check_pair_conservation<3>(true)
 template <int D>
 void check_two_sides_of_a_pair(bool symmetric, bool conductivity) {
   std::mt19937 gen(7 + D + 10 * symmetric + 100 * conductivity);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
-  auto particle = [&] {
-    HydroParticle<D> p{};
-    for (int k = 0; k < D; ++k) {
-      p.x[k] = U(gen);
-      p.v[k] = U(gen) - 0.5;
-    }
-    p.m = 0.5 + U(gen);
-    p.rho = 0.5 + U(gen);
-    p.u = 1 + U(gen);
-    p.p = 0.4 * p.rho * p.u;
-    p.h = 0.4 + 0.4 * U(gen);
-    p.omega = 0.8 + 0.4 * U(gen);
-    p.cs = std::sqrt(1.4 * 0.4 * p.u);
-    p.av = {Real(0.5 + U(gen)), Real(1.0 + U(gen))};
-    p.alpha_u = conductivity ? 0.5 + U(gen) : 0.0;
-    return p;
-  };
+  auto particle = [&] { return random_particle<D>(gen, conductivity, 0.4); };
   int active = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const HydroParticle<D> a = particle(), b = particle();

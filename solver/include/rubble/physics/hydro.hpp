@@ -139,25 +139,26 @@ RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair_rates_a(const HydroPairTerms<D>& t
   return out;
 }
 
-// Particle b's rates from the same terms: what hydro_pair_rates_a gives for
-// the pair seen from b (dx -> -dx, so every gradient and dv change sign and
-// g_a, g_b swap), term for term the same floating-point operations, so a
-// loop that computes each pair once gets the numbers of one that computes
-// it from both sides. b's side needs its 1/Omega (continuity density).
+// The same pair's terms seen from b (dx -> -dx): every gradient and dv
+// change sign and g_a, g_b swap; the rest is symmetric. Negation is exact,
+// so these are bit for bit the terms hydro_pair_terms gives for (b, a).
+template <int D>
+RUBBLE_HD_INLINE HydroPairTerms<D> hydro_pair_terms_seen_from_b(const HydroPairTerms<D>& t) {
+  HydroPairTerms<D> m = t;
+  m.g_a = -t.g_b;
+  m.g_b = -t.g_a;
+  m.gbar = -t.gbar;
+  m.dv = -t.dv;
+  return m;
+}
+
+// Particle b's rates from the same terms, so that a loop computing each
+// pair once gets the numbers of one that computes it from both sides. b's
+// side needs its 1/Omega (continuity density).
 template <int D>
 RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair_rates_b(const HydroPairTerms<D>& t, const HydroSide<D>& sa,
                                                       const HydroSide<D>& sb) {
-  HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
-  if (!t.active) return out;
-  const Vec<D> g_a = -t.g_b, g_b = -t.g_a, gbar = -t.gbar, dv = -t.dv;  // seen from b
-  const Real dv_ga = dot(dv, g_a);
-  out.dvdt = sa.q.m * (pressure_acceleration<D>(sb.f, sa.f, g_a, g_b) - t.pi_ab * gbar);
-  out.dudt = sa.q.m * (sb.f * dv_ga + Real(0.5) * t.pi_ab * dot(dv, gbar));
-  out.drhodt = sa.q.m * dv_ga * sb.inv_omega;
-  out.mu = -t.mu;
-  if (t.alpha_u > Real(0))
-    out.dudt += sa.q.m * conductivity_dudt(t.alpha_u, t.vsig_u, sb.q.u, sa.q.u, t.rhobar, t.F_ab);
-  return out;
+  return hydro_pair_rates_a<D>(hydro_pair_terms_seen_from_b<D>(t), sb, sa);
 }
 
 // The complete hydrodynamic interaction of b on a; dx = x_a - x_b (minimum
