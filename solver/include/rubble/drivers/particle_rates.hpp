@@ -33,6 +33,16 @@
 namespace rubble {
 
 // What is fixed over one evaluation of the right-hand side.
+// The relative tolerance |dh|/h of the smoothing-length iteration for
+// simulation.h_tolerance (0: the precision's default, 1e-10 in double and
+// 1e-5 in single precision; a value below 100 units of rounding of the
+// precision is raised to that, where the iteration could never settle).
+inline Real h_iteration_tolerance(double scene_value) {
+  const double floor = 100 * double(std::numeric_limits<Real>::epsilon());
+  if (scene_value <= 0) return sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  return Real(scene_value > floor ? scene_value : floor);
+}
+
 template <int D>
 struct RhsContext {
   StoreView<D> s;
@@ -46,7 +56,7 @@ struct RhsContext {
   Real xsph_epsilon = 0;
   Real courant = 0, force_factor = 0;
   // summation density: |dh|/h of the Newton iteration (h_iteration_tolerance)
-  Real h_tolerance = sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
+  Real h_tolerance = h_iteration_tolerance(0);
   Vec<D> body_force = Vec<D>::zero();  // uniform external acceleration (simulation.gravity)
   bool has_body_force = false;
 };
@@ -142,16 +152,6 @@ RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t 
     out.dwdh += s.m[b] * w.dwdh;
   });
   return out;
-}
-
-// The relative tolerance |dh|/h of the smoothing-length iteration for
-// simulation.h_tolerance (0: the precision's default, 1e-10 in double and
-// 1e-5 in single precision; a value below 100 units of rounding of the
-// precision is raised to that, where the iteration could never settle).
-inline Real h_iteration_tolerance(double scene_value) {
-  const double floor = 100 * double(std::numeric_limits<Real>::epsilon());
-  if (scene_value <= 0) return sizeof(Real) == 8 ? Real(1e-10) : Real(1e-5);
-  return Real(scene_value > floor ? scene_value : floor);
 }
 
 // Summation density with h and rho solved together by Newton's method
