@@ -195,7 +195,7 @@ std::uint32_t CellList<D>::build_node(std::uint32_t begin, std::uint32_t end, in
 }
 
 template <int D>
-void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) const {
+void CellList<D>::find_neighbors(NeighborLists& out) const {
   const std::size_t n = x_.size();
   out.begin_.assign(n, 0);
   out.count_.assign(n, 0);
@@ -278,7 +278,6 @@ void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) c
     };
     std::vector<std::uint32_t> near;     // cells within reach of the current group
     std::vector<std::uint32_t> scratch;  // the list being found, in full
-    std::vector<Real> scratch_r2;        // and the squared distances (for the visitor)
 
     // static: each thread takes the same run of groups in every search, so
     // its blocks are reused in the same order and their count settles
@@ -312,12 +311,8 @@ void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) c
           // Room for the whole cell before testing it, so that the test
           // can write every candidate and advance only on a hit (no branch
           // to mispredict).
-          if (scratch.size() < found + (m.end - m.begin)) {
-            scratch.resize(2 * (found + (m.end - m.begin)));
-            if (visitor) scratch_r2.resize(scratch.size());
-          }
+          if (scratch.size() < found + (m.end - m.begin)) scratch.resize(2 * (found + (m.end - m.begin)));
           std::uint32_t* out_list = scratch.data() + found;
-          Real* out_r2 = visitor ? scratch_r2.data() + found : nullptr;
           std::size_t hits = 0;
           // If no coordinate difference to this cell can exceed L/2, the
           // minimum image is the plain difference (what separation would
@@ -325,17 +320,7 @@ void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) c
           bool direct = true;
           for (int k2 = 0; k2 < D; ++k2)
             if (box.periodic[k2]) direct = direct && xa[k2] - m.lo[k2] <= half[k2] && xa[k2] - m.hi[k2] >= -half[k2];
-          // (two copies of each loop, so that a search without a visitor
-          // stores no distances)
-          if (direct && out_r2) {
-            for (std::uint32_t b = m.begin; b < m.end; ++b) {
-              const Real r = std::max(ha, hs[b]);
-              const Real d2 = norm2(xa - xs[b]);
-              out_list[hits] = order[b];
-              out_r2[hits] = d2;
-              hits += (d2 < r * r) & (b != a);
-            }
-          } else if (direct) {
+          if (direct) {
             for (std::uint32_t b = m.begin; b < m.end; ++b) {
               const Real r = std::max(ha, hs[b]);
               out_list[hits] = order[b];
@@ -344,10 +329,8 @@ void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) c
           } else {
             for (std::uint32_t b = m.begin; b < m.end; ++b) {
               const Real r = std::max(ha, hs[b]);
-              const Real d2 = norm2(box.separation(xa, xs[b]));
               out_list[hits] = order[b];
-              if (out_r2) out_r2[hits] = d2;
-              hits += (d2 < r * r) & (b != a);
+              hits += (norm2(box.separation(xa, xs[b])) < r * r) & (b != a);
             }
           }
           found += hits;
@@ -355,9 +338,8 @@ void CellList<D>::find_neighbors(NeighborLists& out, NeighborVisitor* visitor) c
         // Ascending input index (already so when the input was in spatial
         // order), then stored as differences (NeighborLists).
         std::uint32_t* const list = scratch.data();
-        const std::uint32_t i = order[a];  // input index
-        if (visitor) visitor->visit(i, list, scratch_r2.data(), found);
         if (!std::is_sorted(list, list + found)) std::sort(list, list + found);
+        const std::uint32_t i = order[a];  // input index
         const std::size_t units = NeighborLists::encoded_units(list, found, i);
         if (!cur || used + units > cur->size) next_block(units);
         begin[i] = std::uint32_t(used);

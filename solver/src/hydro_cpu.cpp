@@ -141,7 +141,7 @@ void HydroCpu<D>::sort_particles() {
 }
 
 template <int D>
-void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius, NeighborVisitor* visitor) {
+void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius) {
   const ScopedSeconds timer(phases_.neighbours);
   const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
   try {
@@ -150,7 +150,7 @@ void HydroCpu<D>::build_neighbors(const std::vector<Real>& search_radius, Neighb
     // e.g. a smoothing length that grew past half a periodic length
     throw RunError(std::string("the neighbour search failed (") + e.what() + ")");
   }
-  cells_.find_neighbors(nbrs_, visitor);
+  cells_.find_neighbors(nbrs_);
   ++rebuilds_;
 }
 
@@ -184,22 +184,6 @@ RhsContext<D> HydroCpu<D>::context() {
   return c;
 }
 
-// The first Newton step of the smoothing-length iteration, taken inside the
-// neighbour search (NeighborVisitor): the search has just computed every
-// listed neighbour's distance, so the density sums at the stored h cost no
-// second walk over the lists. Where that step shows h converged (the
-// ambient gas, most particles of most steps) the particle is done; the
-// others are marked for summation_density_particle.
-template <int D>
-struct DensityAtStart final : NeighborVisitor {
-  const RhsContext<D>& c;
-  std::uint8_t* done;
-  DensityAtStart(const RhsContext<D>& context, std::uint8_t* done_flags) : c(context), done(done_flags) {}
-  void visit(std::uint32_t i, const std::uint32_t* nbr, const Real* r2, std::size_t count) override {
-    done[i] = density_converged_at_start<D>(c, i, nbr, r2, count) ? 1 : 0;
-  }
-};
-
 // Summation density with h and rho solved together (smoothing_length.hpp).
 // The neighbour lists are built with a search radius 5 % above the current
 // h; a particle whose h grows past its search radius triggers a rebuild, in
@@ -208,9 +192,7 @@ struct DensityAtStart final : NeighborVisitor {
 // 58 inside the support, and the density and force loops walked them all;
 // at 5 % they hold ~67, the 3-D Sedov blast needs no extra rebuild (48
 // searches in 48 evaluations at 32^3), and the results are those of a
-// wider search (entries outside the support add exact zeros). The first
-// Newton step is taken in the search (DensityAtStart); the loop below
-// iterates only the particles it left.
+// wider search (entries outside the support add exact zeros).
 template <int D>
 void HydroCpu<D>::summation_density_and_h() {
   const std::size_t n = ps_.n;
@@ -218,18 +200,15 @@ void HydroCpu<D>::summation_density_and_h() {
   constexpr Real kRegrowSkin = Real(1.3);
   search_radius_.resize(n);
   for (std::size_t i = 0; i < n; ++i) search_radius_[i] = kSkin * ps_.h[i];
-  density_done_.resize(n);
 
   for (int attempt = 0; attempt < 8; ++attempt) {
+    build_neighbors(search_radius_);
     const RhsContext<D> c = context();
-    DensityAtStart<D> first_step(c, density_done_.data());
-    build_neighbors(search_radius_, &first_step);
     int outgrown = 0;
     {
       const ScopedSeconds timer(phases_.density);
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : outgrown)
       for (std::size_t a = 0; a < n; ++a) {
-        if (density_done_[a]) continue;
         const std::uint32_t ia = static_cast<std::uint32_t>(a);
         if (!summation_density_particle<D>(c, ia, search_radius_[a], ListNeighbors{nbrs_, ia})) {
           search_radius_[a] = kRegrowSkin * ps_.h[a];

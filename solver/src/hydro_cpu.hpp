@@ -56,7 +56,6 @@ class HydroCpu {
     nbrs_ = NeighborLists{};
     cells_ = CellList<D>{};
     std::vector<Real>().swap(search_radius_);
-    std::vector<std::uint8_t>().swap(density_done_);
   }
   // Calls of evaluate() so far (each evaluates every particle once).
   std::int64_t evaluations() const { return evaluations_; }
@@ -71,7 +70,7 @@ class HydroCpu {
 
  private:
   RhsContext<D> context();  // pointers into the store: valid until it is resized
-  void build_neighbors(const std::vector<Real>& search_radius, NeighborVisitor* visitor = nullptr);
+  void build_neighbors(const std::vector<Real>& search_radius);
   void summation_density_and_h();
   void h_from_continuity_density();
   void equation_of_state();
@@ -95,7 +94,6 @@ class HydroCpu {
   CellList<D> cells_;
   NeighborLists nbrs_;
   std::vector<Real> search_radius_;
-  std::vector<std::uint8_t> density_done_;  // summation density: converged in the search's pass
   std::int64_t rebuilds_ = 0;
   SelfGravity gravity_;  // off unless the scene's [gravity] turns it on (3-D)
   bool solid_ = false;

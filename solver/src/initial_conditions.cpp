@@ -322,11 +322,7 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
   // spare in the blocks, and the per-particle index (begin, count, block)
   const std::size_t lists = std::size_t(2 * 1.125 * neighbours) + 3 * sizeof(std::uint32_t);
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
-  // summation density: the CPU driver's search radius and its flag of the
-  // particles whose h converged in the search (hydro_cpu.cpp)
-  const bool summation = scene.simulation.density == DensityForm::Summation;
-  const std::size_t driver = summation ? sizeof(Real) + 1 : 0;
-  return store + integrator + snapshot + lists + cells + driver;
+  return store + integrator + snapshot + lists + cells;
 }
 
 double available_memory_bytes() {

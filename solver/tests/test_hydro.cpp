@@ -1,7 +1,6 @@
 // Unit tests of the hydrodynamic physics functions (rubble/physics/):
-// ideal-gas EOS, artificial viscosity, smoothing length (with the first
-// Newton step taken in the neighbour search), and the pair interaction's
-// conservation properties.
+// ideal-gas EOS, artificial viscosity, smoothing length, and the pair
+// interaction's conservation properties.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,8 +9,6 @@
 #include <random>
 #include <vector>
 
-#include "rubble/drivers/particle_rates.hpp"
-#include "rubble/neighbors/cell_list.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/physics/artificial_conductivity.hpp"
 #include "rubble/physics/eos/eos.hpp"
@@ -279,89 +276,4 @@ TEST(ParticleStore, PermuteMovesEveryField) {
   EXPECT_EQ(ps.x[0][0], 2);
   EXPECT_EQ(ps.m[1], 10);
   EXPECT_EQ(ps.material_id[2], 1);
-}
-
-// The first Newton step of the smoothing-length iteration taken in the
-// neighbour search (density_converged_at_start, fed by the search's
-// NeighborVisitor with each neighbour's squared distance) decides as the
-// list pass (summation_density_particle) does: on a jittered 3-D set whose
-// h have converged it accepts every particle, with rho and Omega equal to
-// the list pass's to rounding (the sums only add in another order) and h
-// untouched; a particle whose h is moved 1 % off is left to the iteration,
-// and nothing of it is written.
-namespace {
-struct FirstStepVisitor final : NeighborVisitor {
-  const RhsContext<3>& c;
-  std::vector<int>& accepted;
-  FirstStepVisitor(const RhsContext<3>& context, std::vector<int>& out) : c(context), accepted(out) {}
-  void visit(std::uint32_t i, const std::uint32_t* nbr, const Real* r2, std::size_t count) override {
-    accepted[i] = density_converged_at_start<3>(c, i, nbr, r2, count) ? 1 : 0;
-  }
-};
-}  // namespace
-
-TEST(SmoothingLength, FirstStepInTheSearchDecidesAsTheListPass) {
-  constexpr int D = 3;
-  const int side = 10;
-  const std::size_t n = std::size_t(side) * side * side;
-  const Real dx = Real(1) / side, hfact = Real(1.2) * 2;  // support radius H = 2.4 dx
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<Real> jitter(-0.1 * dx, 0.1 * dx);
-  std::vector<Vec<D>> x(n);
-  for (int i = 0; i < side; ++i)
-    for (int j = 0; j < side; ++j)
-      for (int k = 0; k < side; ++k)
-        x[std::size_t((i * side + j) * side + k)] =
-            Vec<D>{(i + Real(0.5)) * dx + jitter(rng), (j + Real(0.5)) * dx + jitter(rng), (k + Real(0.5)) * dx + jitter(rng)};
-  std::vector<Real> m(n, dx * dx * dx), h(n, hfact * dx), rho(n, 1), omega(n, 1);
-  Box<D> box;
-  for (int k = 0; k < D; ++k) box.lo[k] = 0, box.hi[k] = 1, box.periodic[k] = true;
-  RhsContext<D> c;
-  c.s.n = n;
-  c.s.x = x.data(), c.s.m = m.data(), c.s.h = h.data(), c.s.rho = rho.data(), c.s.omega = omega.data();
-  c.domain = box;
-  c.hfact = hfact;
-  c.summation = true;
-  c.h_tolerance = Real(1e-10);
-
-  auto search = [&](NeighborLists& lists, NeighborVisitor* visitor) {
-    std::vector<Real> radius(n);
-    for (std::size_t a = 0; a < n; ++a) radius[a] = Real(kSearchSkin) * h[a];
-    CellList<D> cells;
-    cells.build(x.data(), radius.data(), n, box);
-    cells.find_neighbors(lists, visitor);
-    return radius;
-  };
-  auto list_pass = [&](const NeighborLists& lists, const std::vector<Real>& radius, std::uint32_t a) {
-    return summation_density_particle<D>(c, a, radius[a], [&](auto&& f) { lists.for_each(a, f); });
-  };
-  // converge every h with the list pass (twice: the second search sees the final h)
-  for (int round = 0; round < 2; ++round) {
-    NeighborLists lists;
-    const std::vector<Real> radius = search(lists, nullptr);
-    for (std::size_t a = 0; a < n; ++a) ASSERT_TRUE(list_pass(lists, radius, std::uint32_t(a)));
-  }
-  const std::vector<Real> h_conv = h, rho_conv = rho, omega_conv = omega;
-  const std::size_t moved = 123;
-  h[moved] *= Real(1.01);
-  rho[moved] = omega[moved] = -1;  // marks: must stay unwritten
-
-  std::vector<int> accepted(n, -1);
-  FirstStepVisitor visitor(c, accepted);
-  NeighborLists lists;
-  const std::vector<Real> radius = search(lists, &visitor);
-  for (std::size_t a = 0; a < n; ++a) {
-    if (a == moved) continue;
-    ASSERT_EQ(accepted[a], 1) << "particle " << a;
-    EXPECT_EQ(h[a], h_conv[a]);
-    EXPECT_NEAR(rho[a], rho_conv[a], 1e-13 * rho_conv[a]);
-    EXPECT_NEAR(omega[a], omega_conv[a], 1e-13);
-  }
-  EXPECT_EQ(accepted[moved], 0);
-  EXPECT_EQ(rho[moved], -1);
-  EXPECT_EQ(omega[moved], -1);
-  // the list pass then brings it back to the converged h
-  ASSERT_TRUE(list_pass(lists, radius, std::uint32_t(moved)));
-  EXPECT_NEAR(h[moved], h_conv[moved], 1e-8 * h_conv[moved]);
-  EXPECT_NEAR(rho[moved], rho_conv[moved], 1e-8 * rho_conv[moved]);
 }

@@ -581,57 +581,6 @@ TYPED_TEST(NeighborsTest, DeterministicAcrossThreadCounts) {
 #endif
 }
 
-// The visitor (NeighborVisitor) sees each particle once, with exactly its
-// list and each neighbour's squared distance as Box::separation gives it
-// (bit for bit on open axes and inside the box; to rounding across a
-// periodic wrap, where the search subtracts the wrapped copies); with or
-// without a visitor the lists are the same. Clustered, tenfold H, periodic
-// axes, and not in spatial order.
-class RecordingVisitor final : public NeighborVisitor {
- public:
-  explicit RecordingVisitor(std::size_t n) : lists(n), r2s(n), visits(n, 0) {}
-  void visit(std::uint32_t i, const std::uint32_t* nbr, const Real* r2, std::size_t count) override {
-    ++visits[i];  // each particle's own slot: no two threads write one
-    lists[i].assign(nbr, nbr + count);
-    r2s[i].assign(r2, r2 + count);
-  }
-  std::vector<std::vector<std::uint32_t>> lists;
-  std::vector<std::vector<Real>> r2s;
-  std::vector<int> visits;
-};
-
-TYPED_TEST(NeighborsTest, VisitorSeesEachListWithItsDistances) {
-  constexpr int D = TypeParam::value;
-  for (unsigned periodic : {0u, (1u << D) - 1}) {
-    SCOPED_TRACE("periodic axes mask " + std::to_string(periodic));
-    const auto s = clustered_set<D>(2000, make_box<D>(-1, 1, periodic), 101 + periodic);
-    const std::size_t n = s.x.size();
-    CellList<D> cells;
-    cells.build(s.x.data(), s.H.data(), n, s.box);
-    NeighborLists with, without;
-    RecordingVisitor v(n);
-    cells.find_neighbors(with, &v);
-    cells.find_neighbors(without);
-    EXPECT_EQ(all_lists(with), all_lists(without));
-    std::size_t wrong_r2 = 0;
-    Real worst = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      ASSERT_EQ(v.visits[i], 1) << "particle " << i;
-      std::vector<std::uint32_t> sorted = v.lists[i];
-      std::sort(sorted.begin(), sorted.end());
-      ASSERT_EQ(sorted, list_of(with, i)) << "particle " << i;
-      for (std::size_t k = 0; k < v.lists[i].size(); ++k) {
-        const Real exact = norm2(s.box.separation(s.x[i], s.x[v.lists[i][k]]));
-        const Real err = std::abs(v.r2s[i][k] - exact) / exact;
-        if (periodic == 0u && v.r2s[i][k] != exact) ++wrong_r2;
-        worst = std::max(worst, err);
-      }
-    }
-    EXPECT_EQ(wrong_r2, 0u);
-    EXPECT_LE(worst, 1e-12);  // a wrapped difference: a few ulps of the box over r^2
-  }
-}
-
 // The lists' memory (issue #14): searching again reuses the blocks (no new
 // one), the result is the same; particles in spatial order (as the run keeps
 // them) need few escapes, so the lists take about two bytes per entry; and

@@ -7,7 +7,6 @@
 // list. A candidate may lie beyond the support; every pair function below
 // treats such a pair as absent (its terms are zero), so the two backends
 // see the same pairs. The formulas themselves live in rubble/physics/.
-#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -136,69 +135,23 @@ struct DensitySums {
   Real rho, dwdh;  // sum_b m_b W_ab(h), sum_b m_b dW_ab/dh (self included)
 };
 
-// One neighbour's share of the sums: b at distance r2 = |x_a - x_b|^2 from
-// a, with a's kernel K of support h (h2 = h^2).
-template <int D>
-RUBBLE_HD_INLINE void density_sums_add(DensitySums& sums, const KernelAt<D>& K, Real h2, Real r2, Real m_b) {
-  // the lists hold neighbours a little beyond the support (the search
-  // radius' skin): those stop here, before the square root
-  if (r2 >= h2) return;
-  const KernelWDwdh w = kernel_w_dwdh<D>(K, std::sqrt(r2));
-  sums.rho += m_b * w.w;
-  sums.dwdh += m_b * w.dwdh;
-}
-
-// The self term, with which the sums start.
-template <int D>
-RUBBLE_HD_INLINE DensitySums density_sums_self(const KernelAt<D>& K, Real m_a) {
-  const KernelWDwdh self = kernel_w_dwdh<D>(K, Real(0));
-  return DensitySums{m_a * self.w, m_a * self.dwdh};
-}
-
 template <int D, class Each>
 RUBBLE_HD_INLINE DensitySums density_sums(const RhsContext<D>& c, std::uint32_t a, Real h, Each&& each) {
   const StoreView<D>& s = c.s;
   const KernelAt<D> K = kernel_at<D>(c.kernel, h);
-  DensitySums out = density_sums_self<D>(K, s.m[a]);
+  const KernelWDwdh self = kernel_w_dwdh<D>(K, Real(0));
+  DensitySums out{s.m[a] * self.w, s.m[a] * self.dwdh};
   const Real h2 = h * h;
-  each([&](std::uint32_t b) { density_sums_add<D>(out, K, h2, norm2(c.domain.separation(s.x[a], s.x[b])), s.m[b]); });
+  each([&](std::uint32_t b) {
+    // the lists hold neighbours a little beyond the support (the search
+    // radius' skin): those stop here, before the square root
+    const Real r2 = norm2(c.domain.separation(s.x[a], s.x[b]));
+    if (r2 >= h2) return;
+    const KernelWDwdh w = kernel_w_dwdh<D>(K, std::sqrt(r2));
+    out.rho += s.m[b] * w.w;
+    out.dwdh += s.m[b] * w.dwdh;
+  });
   return out;
-}
-
-// Does one Newton step from h, with the sums d taken at h, show that h has
-// converged (it would move h by at most c.h_tolerance of itself)? If so,
-// writes h, rho and Omega of particle a and returns true; otherwise writes
-// nothing and sets h_new to the step's result.
-template <int D>
-RUBBLE_HD_INLINE bool density_converged(const RhsContext<D>& c, std::uint32_t a, Real h, const DensitySums& d,
-                                        Real& h_new) {
-  const StoreView<D>& s = c.s;
-  h_new = newton_h_step<D>(h, d.rho, d.dwdh, c.hfact, s.m[a]);
-  if (!(std::fabs(h_new - h) <= c.h_tolerance * h)) return false;
-  // converged: h and the sums at h agree to the tolerance (Newton's next
-  // step would move h by less), so no further pass over the neighbours
-  s.h[a] = h;
-  s.rho[a] = d.rho;
-  s.omega[a] = grad_h_omega<D>(h, d.rho, d.dwdh);
-  return true;
-}
-
-// The first Newton step of summation_density_particle, with the sums taken
-// while the neighbours were being found (the CPU search's fused pass, given
-// each neighbour's mass and squared distance): true, with h, rho and Omega
-// written, when particle a's stored h has converged; false, with nothing
-// written, when it needs summation_density_particle.
-template <int D>
-RUBBLE_HD_INLINE bool density_converged_at_start(const RhsContext<D>& c, std::uint32_t a, const std::uint32_t* nbr,
-                                                 const Real* r2, std::size_t count) {
-  const StoreView<D>& s = c.s;
-  const Real h = s.h[a];
-  const KernelAt<D> K = kernel_at<D>(c.kernel, h);
-  DensitySums d = density_sums_self<D>(K, s.m[a]);
-  const Real h2 = h * h;
-  for (std::size_t k = 0; k < count; ++k) density_sums_add<D>(d, K, h2, r2[k], s.m[nbr[k]]);
-  Real h_new;
-  return density_converged<D>(c, a, h, d, h_new);
 }
 
 // Summation density with h and rho solved together by Newton's method
@@ -212,11 +165,19 @@ RUBBLE_HD_INLINE bool summation_density_particle(const RhsContext<D>& c, std::ui
                                                  Each&& each) {
   const StoreView<D>& s = c.s;
   constexpr int kMaxNewton = 50;
+  const Real tol = c.h_tolerance;
   Real h = s.h[a] < search_radius ? s.h[a] : search_radius;
   for (int it = 0; it < kMaxNewton; ++it) {
     const DensitySums d = density_sums<D>(c, a, h, each);
-    Real h_new;
-    if (density_converged<D>(c, a, h, d, h_new)) return true;
+    const Real h_new = newton_h_step<D>(h, d.rho, d.dwdh, c.hfact, s.m[a]);
+    if (std::fabs(h_new - h) <= tol * h) {
+      // converged: h and the sums at h agree to tol (Newton's next step
+      // would move h by less), so no further pass over the neighbours
+      s.h[a] = h;
+      s.rho[a] = d.rho;
+      s.omega[a] = grad_h_omega<D>(h, d.rho, d.dwdh);
+      return true;
+    }
     h = h_new;
     if (h > search_radius) break;  // needs more neighbours than listed
   }

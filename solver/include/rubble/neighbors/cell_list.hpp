@@ -184,21 +184,6 @@ class NeighborLists {
   std::vector<std::uint32_t> block_;                       // the block holding the list
 };
 
-// What find_neighbors() hands over, particle by particle, as soon as a
-// particle's neighbours are found: its input index i, the neighbours' input
-// indices and their squared distances |x_i - x_j|^2 (minimum image), in the
-// order found (not yet sorted). It is called once per particle, from the
-// search's threads, for different particles at once. The CPU driver takes
-// the first density sums here, while the distances are at hand, instead of
-// in a second pass over the lists (issue #14).
-class NeighborVisitor {
- public:
-  virtual void visit(std::uint32_t i, const std::uint32_t* nbr, const Real* r2, std::size_t count) = 0;
-
- protected:
-  ~NeighborVisitor() = default;
-};
-
 template <int D>
 class CellList {
  public:
@@ -216,9 +201,8 @@ class CellList {
   void build(const Vec<D>* x, const Real* H, std::size_t n, const Box<D>& box);
 
   // All pairs within max(H_a, H_b), self excluded. OpenMP-parallel over
-  // groups; the result does not depend on the number of threads. With a
-  // visitor, each particle's list is also handed to it (NeighborVisitor).
-  void find_neighbors(NeighborLists& out, NeighborVisitor* visitor = nullptr) const;
+  // groups; the result does not depend on the number of threads.
+  void find_neighbors(NeighborLists& out) const;
 
   std::size_t size() const { return x_.size(); }
   std::size_t cell_count() const { return cells_.size(); }
