@@ -6,7 +6,7 @@ build`; Phantom's source in .deps/phantom/src, see README.md here):
 
     python3 benchmarks/peers/sedov_vs_phantom.py [--threads 2]
         [--small 56:50] [--large 112:100] [--large-steps 10] [--out DIR]
-        [--skip-large] [--rubble-only]
+        [--skip-large] [--rubble-only] [--repeat N]
 
 Two cases, each code as a whole process (set-up included), one after the
 other, with the same number of OpenMP threads:
@@ -31,6 +31,11 @@ change of 1e-4 (Phantom's tolh; rubble's simulation.h_tolerance), the blast
 energy spread by the cubic spline of support 4.8 dx, ambient u = 0. Phantom's force step factor C_force = 0.25
 is its default; rubble's force_factor is its own default (docs/scene.md).
 
+With --repeat N the small case runs N times, rubble and Phantom
+alternating, so that both see the same minutes of a shared machine: the
+table shows each code's run of median wall time, and the speed ratio of
+every pair is listed with its median.
+
 The table is printed and written to OUT/sedov_vs_phantom.md with the JSON
 of every measurement (OUT defaults to build/peers). Ratios are rubble over
 Phantom (speed) or Phantom over rubble (memory), so > 1 favours rubble.
@@ -42,6 +47,7 @@ import argparse
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 import time
@@ -133,6 +139,12 @@ def run_phantom(phantom, paths, npartx, workdir, threads, tmax=None, nmax=None, 
     return result
 
 
+def median_run(rs):
+    """The run of median wall time (the lower middle one for an even count)."""
+    ordered = sorted(rs, key=lambda r: r["wall_s"])
+    return ordered[(len(ordered) - 1) // 2]
+
+
 def rate(r):
     return r["npart"] * r["steps"] / r["wall_s"]
 
@@ -171,6 +183,10 @@ def main():
     ap.add_argument("--large", type=parse_pair, default=(112, 100), help="rubble N : Phantom npartx")
     ap.add_argument("--large-steps", type=int, default=10)
     ap.add_argument("--skip-large", action="store_true")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="run the ~1.7e5 case this many times, the two codes alternating; the table shows each "
+                         "code's run of median wall time, and every pair's speed ratio is listed (the machine's "
+                         "noise: docs/performance.md)")
     ap.add_argument("--rubble-only", action="store_true", help="run rubble's half only")
     ap.add_argument("--build", default=str(REPO / "build"), help="rubble's build folder")
     ap.add_argument("--out", default=str(REPO / "build" / "peers"))
@@ -196,11 +212,18 @@ def main():
             paths = phantom.build()
 
     (nr, npx), (nr_l, npx_l) = a.small, a.large
-    small = [run_rubble(rubble, rung, nr, out / f"rubble_{nr}", a.threads), None]
-    print(json.dumps(small[0]), flush=True)
-    if phantom:
-        small[1] = run_phantom(phantom, paths, npx, out / f"phantom_{npx}", a.threads, tmax=0.1, rung=rung)
-        print(json.dumps(small[1]), flush=True)
+    if a.repeat < 1:
+        sys.exit("sedov_vs_phantom: --repeat must be at least 1")
+    runs = []  # (rubble, Phantom or None) per repetition, one after the other
+    for _ in range(a.repeat):
+        rb = run_rubble(rubble, rung, nr, out / f"rubble_{nr}", a.threads)
+        print(json.dumps(rb), flush=True)
+        ph = None
+        if phantom:
+            ph = run_phantom(phantom, paths, npx, out / f"phantom_{npx}", a.threads, tmax=0.1, rung=rung)
+            print(json.dumps(ph), flush=True)
+        runs.append((rb, ph))
+    small = [median_run([r[0] for r in runs]), median_run([r[1] for r in runs if r[1]]) if phantom else None]
     large = None
     if not a.skip_large:
         ph = None
@@ -214,10 +237,17 @@ def main():
         print(json.dumps(rb), flush=True)
         large = [rb, ph]
     text = table(small, large)
+    if a.repeat > 1 and phantom:
+        ratios = [rate(rb) / rate(ph) for rb, ph in runs]
+        text += ("\n- ~1.7e5, each of the " + str(a.repeat) + " pairs of runs: rubble/Phantom particle-steps per "
+                 "second = " + ", ".join(f"{q:.2f}" for q in ratios) + f"; median {statistics.median(ratios):.2f}")
     print(text)
-    (out / "sedov_vs_phantom.md").write_text(
-        f"Command: python3 benchmarks/peers/sedov_vs_phantom.py --threads {a.threads}\n\n" + text + "\n")
-    (out / "sedov_vs_phantom.json").write_text(json.dumps({"small": small, "large": large}, indent=1))
+    command = f"python3 benchmarks/peers/sedov_vs_phantom.py --threads {a.threads}"
+    if a.repeat > 1:
+        command += f" --repeat {a.repeat}"
+    (out / "sedov_vs_phantom.md").write_text(f"Command: {command}\n\n" + text + "\n")
+    (out / "sedov_vs_phantom.json").write_text(
+        json.dumps({"small": small, "large": large, "small_runs": runs}, indent=1))
 
 
 if __name__ == "__main__":
