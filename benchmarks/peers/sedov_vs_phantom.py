@@ -191,6 +191,8 @@ def main():
     ap.add_argument("--build", default=str(REPO / "build"), help="rubble's build folder")
     ap.add_argument("--out", default=str(REPO / "build" / "peers"))
     a = ap.parse_args()
+    if a.repeat < 1:
+        ap.error("--repeat must be at least 1")
 
     rubble = Path(a.build) / "rubble"
     rung = Path(a.build) / "verification" / "sedov_taylor" / "sedov_rung"
@@ -212,8 +214,6 @@ def main():
             paths = phantom.build()
 
     (nr, npx), (nr_l, npx_l) = a.small, a.large
-    if a.repeat < 1:
-        sys.exit("sedov_vs_phantom: --repeat must be at least 1")
     runs = []  # (rubble, Phantom or None) per repetition, one after the other
     for _ in range(a.repeat):
         rb = run_rubble(rubble, rung, nr, out / f"rubble_{nr}", a.threads)
