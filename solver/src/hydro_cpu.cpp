@@ -323,10 +323,19 @@ void HydroCpu<D>::rates() {
 // Pass 1, per particle: the velocity gradient L_a (optionally with the
 // kernel-gradient correction), the Jaumann stress rate and the artificial
 // stress tensor R_a. Pass 2, per pair: solid_pair (full stress).
+// Both passes divide by every neighbour's H (kernel) and pass 2 by its
+// rho^2 (stress term): these inverses are taken once per particle first
+// (solid_inverses; the same values as computed at each pair, so the
+// results are bit for bit those of the per-pair form, which the CUDA
+// backend keeps). Measured on the oscillating plate: see docs/performance.md.
 template <int D>
 void HydroCpu<D>::solid_rates() {
   const std::size_t n = ps_.n;
-  const RhsContext<D> c = context();
+  RhsContext<D> c = context();
+  solid_inv_.resize(n);
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) solid_inv_[a] = solid_inverses(ps_.h[a], ps_.rho[a]);
+  c.solid_inv = solid_inv_.data();
   std::int64_t fallbacks = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : fallbacks)
   for (std::size_t a = 0; a < n; ++a) {

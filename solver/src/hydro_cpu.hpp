@@ -56,6 +56,7 @@ class HydroCpu {
     nbrs_ = NeighborLists{};
     cells_ = CellList<D>{};
     std::vector<Real>().swap(search_radius_);
+    std::vector<SolidInverses>().swap(solid_inv_);
   }
   // Calls of evaluate() so far (each evaluates every particle once).
   std::int64_t evaluations() const { return evaluations_; }
@@ -100,6 +101,7 @@ class HydroCpu {
   bool kernel_correction_ = false;
   bool artificial_stress_ = false;
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
+  std::vector<SolidInverses> solid_inv_;  // solids: 1/H, 1/rho^2 per particle (scratch of solid_rates)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
   Real shifting_ = 0;       // particle shifting coefficient A (0 = off)

@@ -106,6 +106,16 @@ RUBBLE_HD_INLINE Real double_dot(const Mat<D>& a, const Mat<D>& b) {
   return s;
 }
 
+// Every entry exactly zero (a solid pair skips the artificial stress of two
+// particles without any).
+template <int D>
+RUBBLE_HD_INLINE bool is_zero(const Mat<D>& a) {
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j)
+      if (a.m[i][j] != Real(0)) return false;
+  return true;
+}
+
 template <int D>
 RUBBLE_HD_INLINE Real determinant(const Mat<D>& a) {
   if constexpr (D == 1) return a.m[0][0];

@@ -53,6 +53,9 @@ struct RhsContext {
   bool summation = false;          // summation density (grad-h terms) or continuity
   bool kernel_correction = false;  // solids: corrected velocity gradient
   Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
+  // solids: each particle's solid_inverses, computed once per evaluation
+  // (solid_inverses_particle); nullptr: computed at every pair instead
+  const SolidInverses* solid_inv = nullptr;
   Real xsph_epsilon = 0;
   Real courant = 0, force_factor = 0;
   // summation density: |dh|/h of the Newton iteration (h_iteration_tolerance)
@@ -415,6 +418,13 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
 
 // ---- feature set Solid ---------------------------------------------------
 
+// 1/H and 1/rho^2 of particle i (solid.hpp: SolidInverses): from the
+// driver's table when it keeps one, else computed (the same values).
+template <int D>
+RUBBLE_HD_INLINE SolidInverses solid_inverses_particle(const RhsContext<D>& c, std::uint32_t i) {
+  return c.solid_inv ? c.solid_inv[i] : solid_inverses(c.s.h[i], c.s.rho[i]);
+}
+
 // Pass 1: the velocity gradient L_a (with the kernel-gradient correction
 // when on), the Jaumann stress rate dS/dt and the artificial stress R_a.
 // With the correction it also stores K_a = C_a^T, with which pass 2 turns
@@ -426,13 +436,14 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
   const StoreView<D>& s = c.s;
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
   Real r_min = std::numeric_limits<Real>::max();  // nearest neighbour (artificial stress)
+  const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, a).inv_h);
   each([&](std::uint32_t b) {
     const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
     const Real r = norm(dx);
     if (r > Real(0) && r < r_min) r_min = r;
     if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
-    const Vec<D> g =
-        Real(0.5) * (kernel_grad<D>(kernel_at<D>(c.kernel, s.h[a]), dx, r) + kernel_grad<D>(kernel_at<D>(c.kernel, s.h[b]), dx, r));
+    const Vec<D> g = Real(0.5) * (kernel_grad<D>(ka, dx, r) +
+                                  kernel_grad<D>(kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, b).inv_h), dx, r));
     // volume weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp)
     const Real rho_w = c.kernel_correction ? s.rho[a] : s.rho[b];
     L += velocity_gradient_pair_term<D>(s.m[b], rho_w, seen_velocity<D>(s, a, b) - s.v[a], g);
@@ -475,12 +486,14 @@ template <int D, class Each>
 RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   const StoreView<D>& s = c.s;
   const SolidParticle<D> pa = solid_particle<D>(c, a);
+  const SolidInverses ia = solid_inverses_particle<D>(c, a);
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
     SolidParticle<D> pb = solid_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
-    const SolidPairRates<D> r = solid_pair<D>(c.kernel, pa, pb, c.domain.separation(s.x[a], s.x[b]));
+    const SolidPairRates<D> r =
+        solid_pair<D>(c.kernel, pa, ia, pb, solid_inverses_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]));
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;

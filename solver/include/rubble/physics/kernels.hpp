@@ -197,11 +197,18 @@ struct KernelAt {
   Real c_grad;  // sigma_D / H^(D+2)
 };
 
+// The same from 1/H computed elsewhere as Real(1) / H (bit for bit the
+// result of kernel_at(k, H)): the solid driver keeps each particle's 1/H for
+// its neighbours (SolidInverses in drivers/particle_rates.hpp).
 template <int D>
-RUBBLE_HD_INLINE KernelAt<D> kernel_at(KernelType k, Real H) {
-  const Real inv = Real(1) / H;
+RUBBLE_HD_INLINE KernelAt<D> kernel_at_inv(KernelType k, Real inv) {
   const Real c = kernel_detail::sigma<D>(k) * kernel_detail::ipow<D>(inv);
   return KernelAt<D>{k, inv, c, c * inv, c * inv * inv};
+}
+
+template <int D>
+RUBBLE_HD_INLINE KernelAt<D> kernel_at(KernelType k, Real H) {
+  return kernel_at_inv<D>(k, Real(1) / H);
 }
 
 // W(r, H) and ∂W/∂H(r, H) from one evaluation of q (summation density and

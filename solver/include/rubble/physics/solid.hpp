@@ -73,25 +73,47 @@ struct SolidPairRates {
   Real mu;  // |mu_ab| for the Courant condition
 };
 
+// The two divisions a particle brings to each of its solid pairs: 1/H of its
+// kernel and 1/rho^2 of its stress term. The CPU driver computes them once
+// per particle and evaluation and hands them to every pair
+// (RhsContext::solid_inv); without them solid_pair computes them per pair,
+// the same values bit for bit.
+struct SolidInverses {
+  Real inv_h, inv_rho2;
+};
+
+RUBBLE_HD_INLINE SolidInverses solid_inverses(Real h, Real rho) {
+  return SolidInverses{Real(1) / h, Real(1) / (rho * rho)};
+}
+
+// sigma / rho^2 of a particle, from 1/rho^2.
+template <int D>
+RUBBLE_HD_INLINE Mat<D> stress_times_inv_rho2(Real p, const Mat<D>& S, Real inv_rho2) {
+  Mat<D> s = S;
+  for (int i = 0; i < D; ++i) s.m[i][i] -= p;
+  return inv_rho2 * s;
+}
+
 // sigma / rho^2 of a particle.
 template <int D>
 RUBBLE_HD_INLINE Mat<D> stress_over_rho2(Real p, const Mat<D>& S, Real rho) {
-  Mat<D> s = S;
-  for (int i = 0; i < D; ++i) s.m[i][i] -= p;
-  return (Real(1) / (rho * rho)) * s;
+  return stress_times_inv_rho2<D>(p, S, Real(1) / (rho * rho));
 }
 
-// The complete solid interaction of b on a; dx = x_a - x_b (minimum image).
+// The complete solid interaction of b on a; dx = x_a - x_b (minimum image),
+// ia and ib the particles' solid_inverses.
 template <int D>
-RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a,
-                                              const SolidParticle<D>& b, const Vec<D>& dx) {
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a, const SolidInverses& ia,
+                                              const SolidParticle<D>& b, const SolidInverses& ib,
+                                              const Vec<D>& dx) {
   SolidPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
   const Real r2 = norm2(dx);
   const Real r = std::sqrt(r2);
   if (r <= Real(0)) return out;
   if (r >= a.h && r >= b.h) return out;
 
-  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel_at<D>(kernel, a.h), dx, r) + kernel_grad<D>(kernel_at<D>(kernel, b.h), dx, r));
+  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel_at_inv<D>(kernel, ia.inv_h), dx, r) +
+                                kernel_grad<D>(kernel_at_inv<D>(kernel, ib.inv_h), dx, r));
   const Vec<D> dv = a.v - b.v;
 
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
@@ -100,13 +122,15 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
   const Real rhobar = Real(0.5) * (a.rho + b.rho);
   const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
 
-  const Mat<D> sa = stress_over_rho2(a.p, a.S, a.rho);
-  const Mat<D> sb = stress_over_rho2(b.p, b.S, b.rho);
+  const Mat<D> sa = stress_times_inv_rho2(a.p, a.S, ia.inv_rho2);
+  const Mat<D> sb = stress_times_inv_rho2(b.p, b.S, ib.inv_rho2);
   // pair terms that are shared equally (viscosity, artificial stress)
   Mat<D> shared = Mat<D>::zero();
   for (int i = 0; i < D; ++i) shared.m[i][i] = -pi_ab;
   const Real n = Real(0.5) * (a.as_exponent + b.as_exponent);
-  if (n > Real(0)) {
+  // two particles without artificial stress (R = 0, e.g. the clumping form
+  // on an ordered lattice) skip the factor's two kernel evaluations
+  if (n > Real(0) && !(is_zero(a.R) && is_zero(b.R))) {
     const Real dp = Real(0.5) * (a.dp + b.dp);
     const Real fn = artificial_stress_factor(kernel_w<D>(kernel, r, hbar), kernel_w<D>(kernel, dp, hbar), n);
     shared += fn * (a.R + b.R);
@@ -137,6 +161,13 @@ RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidPart
     out.dudt += b.m * conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
   }
   return out;
+}
+
+// The same, computing both particles' inverses here (tests; one pair).
+template <int D>
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a,
+                                              const SolidParticle<D>& b, const Vec<D>& dx) {
+  return solid_pair<D>(kernel, a, solid_inverses(a.h, a.rho), b, solid_inverses(b.h, b.rho), dx);
 }
 
 // Longitudinal (P-wave) speed of an elastic solid, the signal speed of the
