@@ -344,10 +344,68 @@ void HydroCpu<D>::solid_rates() {
   }
   fallbacks_last_ = fallbacks;
   fallbacks_total_ += fallbacks;
+  const StoreView<D>& s = c.s;
+  if (s.wall_normal) {  // free-slip walls: the velocity seen of a wall particle depends on who looks
 #pragma omp parallel for schedule(dynamic, 256)
-  for (std::size_t a = 0; a < n; ++a) {
-    const std::uint32_t ia = static_cast<std::uint32_t>(a);
-    solid_rates_particle<D>(c, ia, ListNeighbors{nbrs_, ia});
+    for (std::size_t a = 0; a < n; ++a) {
+      const std::uint32_t ia = static_cast<std::uint32_t>(a);
+      solid_rates_particle<D>(c, ia, ListNeighbors{nbrs_, ia});
+    }
+    return;
+  }
+  // Pass 2 each pair once, as HydroCpu::rates: a contiguous Morton range
+  // per thread, a pair inside the range computed once from its lower index
+  // (solid_pair_rates_a and _b), a pair across ranges from each side for
+  // the thread's own particle only; every write goes to the thread's own
+  // particles. A particle's sums are complete when its thread has walked
+  // its range, so the thread then takes its porous particles' dalpha/dt.
+#pragma omp parallel
+  {
+#if defined(_OPENMP)
+    const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
+#else
+    const std::size_t threads = 1, t = 0;
+#endif
+    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    for (std::size_t a = lo; a < hi; ++a) {
+      s.dvdt[a] = Vec<D>::zero();
+      s.dudt[a] = Real(0);
+      s.drhodt[a] = Real(0);
+      s.mu_max[a] = Real(0);
+    }
+    for (std::size_t a = lo; a < hi; ++a) {
+      const std::uint32_t ia = static_cast<std::uint32_t>(a);
+      const SolidParticle<D> pa = solid_particle<D>(c, ia);
+      const SolidInverses inv_a = c.solid_inv[a];
+      Vec<D> dvdt = Vec<D>::zero();
+      Real dudt = 0, drhodt = 0, mu_max = 0;
+      nbrs_.for_each(a, [&](std::uint32_t b) {
+        const bool mine = b >= lo && b < hi;
+        if (mine && b < a) return;  // done from b's side
+        const SolidPairTerms<D> terms =
+            solid_pair_terms<D>(c.kernel, pa, inv_a, solid_particle<D>(c, b), c.solid_inv[b],
+                                c.domain.separation(s.x[a], s.x[b]));
+        if (!terms.active) return;
+        const SolidPairRates<D> ra = solid_pair_rates_a<D>(terms, s.m[b]);
+        dvdt += ra.dvdt;
+        dudt += ra.dudt;
+        drhodt += ra.drhodt;
+        mu_max = ra.mu > mu_max ? ra.mu : mu_max;
+        if (!mine) return;
+        const SolidPairRates<D> rb = solid_pair_rates_b<D>(terms, s.m[a]);
+        s.dvdt[b] += rb.dvdt;
+        s.dudt[b] += rb.dudt;
+        s.drhodt[b] += rb.drhodt;
+        if (rb.mu > s.mu_max[b]) s.mu_max[b] = rb.mu;
+      });
+      s.dvdt[a] += dvdt;
+      s.dudt[a] += dudt;
+      s.drhodt[a] += drhodt;
+      if (mu_max > s.mu_max[a]) s.mu_max[a] = mu_max;
+    }
+    if (s.dalphadt)
+      for (std::size_t a = lo; a < hi; ++a)
+        s.dalphadt[a] = porosity_rate_particle<D>(c, static_cast<std::uint32_t>(a), s.drhodt[a], s.dudt[a]);
   }
 }
 

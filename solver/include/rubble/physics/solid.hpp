@@ -100,67 +100,129 @@ RUBBLE_HD_INLINE Mat<D> stress_over_rho2(Real p, const Mat<D>& S, Real rho) {
   return stress_times_inv_rho2<D>(p, S, Real(1) / (rho * rho));
 }
 
-// The complete solid interaction of b on a; dx = x_a - x_b (minimum image),
-// ia and ib the particles' solid_inverses.
+// What the two sides of a solid pair share, computed once: the CPU driver
+// computes a pair of two particles of its own range once and gives both
+// their rates (solid_pair_rates_a and _b), the same floating-point
+// operations as the pair computed from each side (seen from b, dx, gbar
+// and v_ab change sign, which is exact, and every sum of two terms
+// commutes), so only the order of each particle's sum differs from the
+// gather loop (tested bit for bit in test_solid_physics.cpp).
 template <int D>
-RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a, const SolidInverses& ia,
-                                              const SolidParticle<D>& b, const SolidInverses& ib,
-                                              const Vec<D>& dx) {
-  SolidPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+struct SolidPairTerms {
+  bool active = false;  // inside a support, r > 0
+  bool corrected = false;
+  Vec<D> g, dv;        // gbar (symmetrised kernel gradient at dx), v_a - v_b
+  Vec<D> ga, gb;       // the gradient each side's stress acts along (K gbar, or gbar)
+  Vec<D> force;        // the momentum bracket: dv_a/dt = m_b force, dv_b/dt = -m_a force
+  Mat<D> sa, sb, shared;
+  Real mu = 0;         // the viscosity's mu_ab (<= 0 approaching)
+  Real half_shared_work = 0;  // (shared : (v_ab (x) gbar)) / 2, corrected form
+  Real cond = 0;       // conductivity du_a/dt without the mass m_b (0 when off)
+};
+
+// ia and ib: the particles' solid_inverses; dx = x_a - x_b (minimum image).
+template <int D>
+RUBBLE_HD_INLINE SolidPairTerms<D> solid_pair_terms(KernelType kernel, const SolidParticle<D>& a,
+                                                    const SolidInverses& ia, const SolidParticle<D>& b,
+                                                    const SolidInverses& ib, const Vec<D>& dx) {
+  SolidPairTerms<D> t;
   const Real r2 = norm2(dx);
   const Real r = std::sqrt(r2);
-  if (r <= Real(0)) return out;
-  if (r >= a.h && r >= b.h) return out;
+  if (r <= Real(0)) return t;
+  if (r >= a.h && r >= b.h) return t;
+  t.active = true;
 
-  const Vec<D> g = Real(0.5) * (kernel_grad<D>(kernel_at_inv<D>(kernel, ia.inv_h), dx, r) +
-                                kernel_grad<D>(kernel_at_inv<D>(kernel, ib.inv_h), dx, r));
-  const Vec<D> dv = a.v - b.v;
+  t.g = Real(0.5) * (kernel_grad<D>(kernel_at_inv<D>(kernel, ia.inv_h), dx, r) +
+                     kernel_grad<D>(kernel_at_inv<D>(kernel, ib.inv_h), dx, r));
+  t.dv = a.v - b.v;
 
   const ViscosityParams av{Real(0.5) * (a.av.alpha + b.av.alpha), Real(0.5) * (a.av.beta + b.av.beta)};
   const Real hbar = Real(0.5) * (a.h + b.h);
-  const Real mu = viscosity_mu(dot(dv, dx), r2, monaghan_h<D>(kernel, hbar));
+  t.mu = viscosity_mu(dot(t.dv, dx), r2, monaghan_h<D>(kernel, hbar));
   const Real rhobar = Real(0.5) * (a.rho + b.rho);
-  const Real pi_ab = (mu < Real(0)) ? viscosity_pi(av, mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
+  const Real pi_ab = (t.mu < Real(0)) ? viscosity_pi(av, t.mu, Real(0.5) * (a.cs + b.cs), rhobar) : Real(0);
 
-  const Mat<D> sa = stress_times_inv_rho2(a.p, a.S, ia.inv_rho2);
-  const Mat<D> sb = stress_times_inv_rho2(b.p, b.S, ib.inv_rho2);
+  t.sa = stress_times_inv_rho2(a.p, a.S, ia.inv_rho2);
+  t.sb = stress_times_inv_rho2(b.p, b.S, ib.inv_rho2);
   // pair terms that are shared equally (viscosity, artificial stress)
-  Mat<D> shared = Mat<D>::zero();
-  for (int i = 0; i < D; ++i) shared.m[i][i] = -pi_ab;
+  t.shared = Mat<D>::zero();
+  for (int i = 0; i < D; ++i) t.shared.m[i][i] = -pi_ab;
   const Real n = Real(0.5) * (a.as_exponent + b.as_exponent);
   // two particles without artificial stress (R = 0, e.g. the clumping form
   // on an ordered lattice) skip the factor's two kernel evaluations
   if (n > Real(0) && !(is_zero(a.R) && is_zero(b.R))) {
     const Real dp = Real(0.5) * (a.dp + b.dp);
     const Real fn = artificial_stress_factor(kernel_w<D>(kernel, r, hbar), kernel_w<D>(kernel, dp, hbar), n);
-    shared += fn * (a.R + b.R);
+    t.shared += fn * (a.R + b.R);
   }
 
-  if (a.K || b.K) {  // kernel-gradient correction: each stress along its own K gbar
-    const Vec<D> ga = a.K ? (*a.K) * g : g;
-    const Vec<D> gb = b.K ? (*b.K) * g : g;
-    out.dvdt = b.m * (sa * ga + sb * gb + shared * g);
-    out.dudt = -b.m * (double_dot(sa, Mat<D>::outer(dv, ga)) + Real(0.5) * double_dot(shared, Mat<D>::outer(dv, g)));
-    out.drhodt = b.m * dot(dv, ga);
+  t.corrected = a.K || b.K;
+  if (t.corrected) {  // kernel-gradient correction: each stress along its own K gbar
+    t.ga = a.K ? (*a.K) * t.g : t.g;
+    t.gb = b.K ? (*b.K) * t.g : t.g;
+    t.force = t.sa * t.ga + t.sb * t.gb + t.shared * t.g;
+    t.half_shared_work = Real(0.5) * double_dot(t.shared, Mat<D>::outer(t.dv, t.g));
   } else {
-    out.dvdt = b.m * ((sa + sb + shared) * g);
-    // -(sigma_a/rho_a^2 + shared/2) : (v_ab (x) g)
-    const Mat<D> work = sa + Real(0.5) * shared;
-    out.dudt = -b.m * double_dot(work, Mat<D>::outer(dv, g));
-    out.drhodt = b.m * dot(dv, g);
+    t.ga = t.gb = t.g;
+    t.force = (t.sa + t.sb + t.shared) * t.g;
   }
-  out.mu = -mu;
 
   // Artificial conductivity (Price 2008), as in hydro_pair: the fluid of a
   // scene that also holds a solid keeps it (issue #17 item 6); pair-mean
   // coefficient, so it acts at half strength across a fluid-solid contact.
   const Real alpha_u = Real(0.5) * (a.alpha_u + b.alpha_u);
   if (alpha_u > Real(0)) {
-    const Real F_ab = dot(g, dx) / r;  // g = xhat F_ab
+    const Real F_ab = dot(t.g, dx) / r;  // g = xhat F_ab
     const Real vsig_u = conductivity_signal_speed(a.p, b.p, rhobar);
-    out.dudt += b.m * conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
+    t.cond = conductivity_dudt(alpha_u, vsig_u, a.u, b.u, rhobar, F_ab);
   }
+  return t;
+}
+
+// The rates of a from the pair (b's mass m_b).
+template <int D>
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair_rates_a(const SolidPairTerms<D>& t, Real m_b) {
+  SolidPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+  if (!t.active) return out;
+  out.dvdt = m_b * t.force;
+  if (t.corrected) {
+    out.dudt = -m_b * (double_dot(t.sa, Mat<D>::outer(t.dv, t.ga)) + t.half_shared_work);
+  } else {
+    // -(sigma_a/rho_a^2 + shared/2) : (v_ab (x) g)
+    const Mat<D> work = t.sa + Real(0.5) * t.shared;
+    out.dudt = -m_b * double_dot(work, Mat<D>::outer(t.dv, t.g));
+  }
+  out.drhodt = m_b * dot(t.dv, t.ga);
+  out.mu = -t.mu;
+  if (t.cond != Real(0)) out.dudt += m_b * t.cond;
   return out;
+}
+
+// The rates of b from the same pair (a's mass m_a): the pair seen from b.
+template <int D>
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair_rates_b(const SolidPairTerms<D>& t, Real m_a) {
+  SolidPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
+  if (!t.active) return out;
+  out.dvdt = m_a * (-t.force);
+  if (t.corrected) {
+    out.dudt = -m_a * (double_dot(t.sb, Mat<D>::outer(t.dv, t.gb)) + t.half_shared_work);
+  } else {
+    const Mat<D> work = t.sb + Real(0.5) * t.shared;
+    out.dudt = -m_a * double_dot(work, Mat<D>::outer(t.dv, t.g));
+  }
+  out.drhodt = m_a * dot(t.dv, t.gb);
+  out.mu = -t.mu;
+  if (t.cond != Real(0)) out.dudt += m_a * (-t.cond);
+  return out;
+}
+
+// The complete solid interaction of b on a; dx = x_a - x_b (minimum image),
+// ia and ib the particles' solid_inverses.
+template <int D>
+RUBBLE_HD_INLINE SolidPairRates<D> solid_pair(KernelType kernel, const SolidParticle<D>& a, const SolidInverses& ia,
+                                              const SolidParticle<D>& b, const SolidInverses& ib,
+                                              const Vec<D>& dx) {
+  return solid_pair_rates_a<D>(solid_pair_terms<D>(kernel, a, ia, b, ib, dx), b.m);
 }
 
 // The same, computing both particles' inverses here (tests; one pair).
