@@ -138,6 +138,7 @@ template <int D>
 void HydroCpu<D>::sort_particles() {
   const Box<D> box = bounding_box<D>(ps_.x.data(), ps_.n, domain_);
   ps_.permute(spatial_sort_permutation<D>(ps_.x.data(), ps_.n, box));
+  lists_in_order_ = false;  // the lists index the particles in the old order
 }
 
 template <int D>
@@ -223,6 +224,15 @@ void HydroCpu<D>::summation_density_and_h() {
   throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
 }
 
+// Continuity density: h follows rho, and the lists are searched with the
+// radius kSearchSkin h and kept across evaluations while they still hold
+// every pair that can interact (lists_still_hold). Entries beyond both
+// supports add nothing (every pair function skips them, as it skips the
+// GPU's cell candidates), and a list keeps its ascending order, so a kept
+// list gives the same sums, bit for bit, as a new search would
+// (Run.KeptNeighbourListsGiveTheSameRun). Solids move a small fraction of
+// h per step, so a search is then needed only after each sort (every 16
+// steps; docs/performance.md).
 template <int D>
 void HydroCpu<D>::h_from_continuity_density() {
   const std::size_t n = ps_.n;
@@ -232,7 +242,40 @@ void HydroCpu<D>::h_from_continuity_density() {
 #pragma omp parallel for if (n > 4096)
     for (std::size_t a = 0; a < n; ++a) h_from_density_particle<D>(c, static_cast<std::uint32_t>(a));
   }
-  build_neighbors(ps_.h);
+  if (keep_lists_ && lists_still_hold()) return;
+  constexpr Real kSkin = Real(kSearchSkin);
+  search_radius_.resize(n);
+  x_at_search_.resize(n);
+#pragma omp parallel for if (n > 4096)
+  for (std::size_t a = 0; a < n; ++a) {
+    search_radius_[a] = kSkin * ps_.h[a];
+    x_at_search_[a] = ps_.x[a];
+  }
+  build_neighbors(search_radius_);
+  lists_in_order_ = true;
+}
+
+// The last search listed every pair closer than max(S_a, S_b), S the search
+// radii. A pair that interacts now is closer than max(h_a, h_b) and was at
+// most d_a + d_b <= 2 d farther apart at the search (d: the largest
+// distance any particle has moved since), so it is listed if every particle
+// has h + 2 d <= S.
+template <int D>
+bool HydroCpu<D>::lists_still_hold() const {
+  const std::size_t n = ps_.n;
+  if (!lists_in_order_ || x_at_search_.size() != n) return false;
+  Real d2 = 0;
+#pragma omp parallel for if (n > 4096) reduction(max : d2)
+  for (std::size_t a = 0; a < n; ++a) {
+    const Real m = norm2(domain_.separation(ps_.x[a], x_at_search_[a]));
+    d2 = m > d2 ? m : d2;
+  }
+  const Real reach = Real(2) * std::sqrt(d2);
+  int broken = 0;
+#pragma omp parallel for if (n > 4096) reduction(+ : broken)
+  for (std::size_t a = 0; a < n; ++a)
+    if (!(ps_.h[a] + reach <= search_radius_[a])) ++broken;
+  return broken == 0;
 }
 
 template <int D>
@@ -382,9 +425,11 @@ void HydroCpu<D>::solid_rates() {
       nbrs_.for_each(a, [&](std::uint32_t b) {
         const bool mine = b >= lo && b < hi;
         if (mine && b < a) return;  // done from b's side
+        const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+        const Real h_max = pa.h > s.h[b] ? pa.h : s.h[b];
+        if (norm2(dx) >= h_max * h_max) return;  // in the search skin only
         const SolidPairTerms<D> terms =
-            solid_pair_terms<D>(c.kernel, pa, inv_a, solid_particle<D>(c, b), c.solid_inv[b],
-                                c.domain.separation(s.x[a], s.x[b]));
+            solid_pair_terms<D>(c.kernel, pa, inv_a, solid_particle<D>(c, b), c.solid_inv[b], dx);
         if (!terms.active) return;
         const SolidPairRates<D> ra = solid_pair_rates_a<D>(terms, s.m[b]);
         dvdt += ra.dvdt;

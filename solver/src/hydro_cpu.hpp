@@ -49,6 +49,9 @@ class HydroCpu {
   const Box<D>& domain() const { return domain_; }
   bool summation_density() const { return summation_; }
   std::int64_t neighbor_rebuilds() const { return rebuilds_; }
+  // Continuity density: keep the lists across evaluations while they hold
+  // (default); off, every evaluation searches (RunOptions::keep_neighbour_lists).
+  void keep_neighbour_lists(bool on) { keep_lists_ = on; }
   // Frees the neighbour lists, the cell list and the search radii once the
   // run is over (the next evaluation would rebuild them), so that the final
   // state's copy does not add to the run's peak memory (issue #14).
@@ -56,6 +59,8 @@ class HydroCpu {
     nbrs_ = NeighborLists{};
     cells_ = CellList<D>{};
     std::vector<Real>().swap(search_radius_);
+    std::vector<Vec<D>>().swap(x_at_search_);
+    lists_in_order_ = false;
     std::vector<SolidInverses>().swap(solid_inv_);
   }
   // Calls of evaluate() so far (each evaluates every particle once).
@@ -74,6 +79,7 @@ class HydroCpu {
   void build_neighbors(const std::vector<Real>& search_radius);
   void summation_density_and_h();
   void h_from_continuity_density();
+  bool lists_still_hold() const;
   void equation_of_state();
   void rates();        // feature set Hydro: pressure, viscosity, conductivity
   void solid_rates();  // feature set Solid: full stress, Jaumann rate, artificial stress
@@ -95,6 +101,13 @@ class HydroCpu {
   CellList<D> cells_;
   NeighborLists nbrs_;
   std::vector<Real> search_radius_;
+  // Continuity density: the positions at the last search, and whether its
+  // lists still index the particles (a sort permutes them); the lists are
+  // kept while every pair that can interact is still in them
+  // (lists_still_hold, hydro_cpu.cpp)
+  std::vector<Vec<D>> x_at_search_;
+  bool lists_in_order_ = false;
+  bool keep_lists_ = true;
   std::int64_t rebuilds_ = 0;
   SelfGravity gravity_;  // off unless the scene's [gravity] turns it on (3-D)
   bool solid_ = false;

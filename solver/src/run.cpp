@@ -286,8 +286,9 @@ class CpuStepper {
  public:
   // `resumed`: the store holds a restart snapshot's state, rates included,
   // in the order it was written: neither sorted nor evaluated again.
-  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed)
+  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed, bool keep_lists)
       : ps_(ps), sys_(scene, ps, domain) {
+    sys_.keep_neighbour_lists(keep_lists);
     for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
     if (resumed) return;
     sys_.sort_particles();
@@ -707,7 +708,8 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     return run_loop<D>(scene, opt, *sys, start, body_first, wall_start);
   }
 #endif
-  auto sys = initial([&] { return std::make_unique<CpuStepper<D>>(scene, ps, domain, start.resumed); });
+  auto sys = initial(
+      [&] { return std::make_unique<CpuStepper<D>>(scene, ps, domain, start.resumed, opt.keep_neighbour_lists); });
   return run_loop<D>(scene, opt, *sys, start, body_first, wall_start);
 }
 

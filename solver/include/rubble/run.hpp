@@ -55,6 +55,11 @@ struct RunOptions {
   // Also write the checkpoint NAME.checkpoint.h5 every so many wall-clock
   // seconds (0: never).
   double checkpoint_every_seconds = 0;
+  // CPU backend, continuity density: keep the neighbour lists across
+  // evaluations while they hold every interacting pair (the default; the
+  // results are the same bit for bit). false: search at every evaluation,
+  // for the test that compares the two.
+  bool keep_neighbour_lists = true;
 };
 
 // Exit status of `rubble run` when a run stopped early with a checkpoint

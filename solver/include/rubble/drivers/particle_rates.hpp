@@ -435,13 +435,18 @@ template <int D, class Each>
 RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   const StoreView<D>& s = c.s;
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
-  Real r_min = std::numeric_limits<Real>::max();  // nearest neighbour (artificial stress)
+  Real r2_min = std::numeric_limits<Real>::max();  // nearest neighbour (artificial stress), squared
   const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, a).inv_h);
   each([&](std::uint32_t b) {
     const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
-    const Real r = norm(dx);
-    if (r > Real(0) && r < r_min) r_min = r;
-    if (r <= Real(0) || (r >= s.h[a] && r >= s.h[b])) return;
+    const Real r2 = norm2(dx);
+    if (r2 > Real(0) && r2 < r2_min) r2_min = r2;
+    // a candidate beyond both supports (search skin, GPU cell) adds nothing:
+    // skip it before the square root
+    const Real h_max = s.h[a] > s.h[b] ? s.h[a] : s.h[b];
+    if (r2 <= Real(0) || r2 >= h_max * h_max) return;
+    const Real r = std::sqrt(r2);
+    if (r >= s.h[a] && r >= s.h[b]) return;
     const Vec<D> g = Real(0.5) * (kernel_grad<D>(ka, dx, r) +
                                   kernel_grad<D>(kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, b).inv_h), dx, r));
     // volume weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp)
@@ -449,6 +454,8 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
     L += velocity_gradient_pair_term<D>(s.m[b], rho_w, seen_velocity<D>(s, a, b) - s.v[a], g);
     if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], rho_w, -dx, g);
   });
+  // sqrt is monotonic and correctly rounded: the nearest distance itself
+  const Real r_min = r2_min < std::numeric_limits<Real>::max() ? std::sqrt(r2_min) : r2_min;
   bool well_conditioned = true;
   if (c.kernel_correction) {
     Mat<D> C;
@@ -490,10 +497,13 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   each([&](std::uint32_t b) {
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real h_max = pa.h > s.h[b] ? pa.h : s.h[b];
+    if (norm2(dx) >= h_max * h_max) return;  // beyond both supports: skip before b's side is gathered
     SolidParticle<D> pb = solid_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
     const SolidPairRates<D> r =
-        solid_pair<D>(c.kernel, pa, ia, pb, solid_inverses_particle<D>(c, b), c.domain.separation(s.x[a], s.x[b]));
+        solid_pair<D>(c.kernel, pa, ia, pb, solid_inverses_particle<D>(c, b), dx);
     dvdt += r.dvdt;
     dudt += r.dudt;
     drhodt += r.drhodt;
