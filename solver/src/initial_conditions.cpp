@@ -322,7 +322,12 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
   // spare in the blocks, and the per-particle index (begin, count, block)
   const std::size_t lists = std::size_t(2 * 1.125 * neighbours) + 3 * sizeof(std::uint32_t);
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
-  return store + integrator + snapshot + lists + cells;
+  // continuity density keeps its lists across evaluations: the positions
+  // at the search (HydroCpu::lists_still_hold); the search radius is in
+  // `cells`; solids add 1/H and 1/rho^2 (SolidInverses)
+  const std::size_t kept = needs.continuity_density ? sizeof(Vec<D>) : 0;
+  const std::size_t solid = needs.solid ? 2 * sizeof(Real) : 0;
+  return store + integrator + snapshot + lists + cells + kept + solid;
 }
 
 double available_memory_bytes() {
