@@ -379,16 +379,16 @@ void HydroCpu<D>::solid_rates() {
 #pragma omp parallel for if (n > 4096)
   for (std::size_t a = 0; a < n; ++a) solid_inv_[a] = solid_inverses(ps_.h[a], ps_.rho[a]);
   c.solid_inv = solid_inv_.data();
-  std::int64_t fallbacks = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : fallbacks)
-  for (std::size_t a = 0; a < n; ++a) {
-    const std::uint32_t ia = static_cast<std::uint32_t>(a);
-    if (!solid_gradient_particle<D>(c, ia, ListNeighbors{nbrs_, ia})) ++fallbacks;
-  }
-  fallbacks_last_ = fallbacks;
-  fallbacks_total_ += fallbacks;
   const StoreView<D>& s = c.s;
+  std::int64_t fallbacks = 0;
   if (s.wall_normal) {  // free-slip walls: the velocity seen of a wall particle depends on who looks
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : fallbacks)
+    for (std::size_t a = 0; a < n; ++a) {
+      const std::uint32_t ia = static_cast<std::uint32_t>(a);
+      if (!solid_gradient_particle<D>(c, ia, ListNeighbors{nbrs_, ia})) ++fallbacks;
+    }
+    fallbacks_last_ = fallbacks;
+    fallbacks_total_ += fallbacks;
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::size_t a = 0; a < n; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
@@ -396,6 +396,46 @@ void HydroCpu<D>::solid_rates() {
     }
     return;
   }
+  // Pass 1 each pair once (the ranges of the force loops below): a pair
+  // inside the thread's range adds its terms to both particles' sums, b's
+  // with the vectors seen from b (other_side); a pair across ranges is
+  // taken from each side for the thread's own particle. A particle's sums
+  // are complete when its thread has walked its range, and the thread then
+  // finishes its own particles (solid_gradient_finish).
+  grad_sums_.resize(n);
+#pragma omp parallel reduction(+ : fallbacks)
+  {
+#if defined(_OPENMP)
+    const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
+#else
+    const std::size_t threads = 1, t = 0;
+#endif
+    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    for (std::size_t a = lo; a < hi; ++a) grad_sums_[a] = GradientSums<D>{};
+    for (std::size_t a = lo; a < hi; ++a) {
+      const std::uint32_t ia = static_cast<std::uint32_t>(a);
+      const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, c.solid_inv[a].inv_h);
+      GradientSums<D> sums;
+      nbrs_.for_each(a, [&](std::uint32_t b) {
+        const bool mine = b >= lo && b < hi;
+        if (mine && b < a) return;  // done from b's side
+        const GradientPairTerms<D> terms = gradient_pair_terms<D>(c, ia, b, ka, c.domain.separation(s.x[a], s.x[b]));
+        if (terms.r2 > Real(0) && terms.r2 < sums.r2_min) sums.r2_min = terms.r2;
+        if (mine && terms.r2 > Real(0) && terms.r2 < grad_sums_[b].r2_min) grad_sums_[b].r2_min = terms.r2;
+        if (!terms.active) return;
+        add_gradient_pair<D>(c, ia, b, terms, sums);
+        if (mine) add_gradient_pair<D>(c, b, ia, other_side<D>(terms), grad_sums_[b]);
+      });
+      GradientSums<D>& own = grad_sums_[a];
+      own.L += sums.L;
+      own.M += sums.M;
+      if (sums.r2_min < own.r2_min) own.r2_min = sums.r2_min;
+    }
+    for (std::size_t a = lo; a < hi; ++a)
+      if (!solid_gradient_finish<D>(c, static_cast<std::uint32_t>(a), grad_sums_[a])) ++fallbacks;
+  }
+  fallbacks_last_ = fallbacks;
+  fallbacks_total_ += fallbacks;
   // Pass 2 each pair once, as HydroCpu::rates: a contiguous Morton range
   // per thread, a pair inside the range computed once from its lower index
   // (solid_pair_rates_a and _b), a pair across ranges from each side for

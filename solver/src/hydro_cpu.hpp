@@ -62,6 +62,7 @@ class HydroCpu {
     std::vector<Vec<D>>().swap(x_at_search_);
     lists_in_order_ = false;
     std::vector<SolidInverses>().swap(solid_inv_);
+    std::vector<GradientSums<D>>().swap(grad_sums_);
   }
   // Calls of evaluate() so far (each evaluates every particle once).
   std::int64_t evaluations() const { return evaluations_; }
@@ -115,6 +116,7 @@ class HydroCpu {
   bool artificial_stress_ = false;
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   std::vector<SolidInverses> solid_inv_;  // solids: 1/H, 1/rho^2 per particle (scratch of solid_rates)
+  std::vector<GradientSums<D>> grad_sums_;  // solids: pass 1's neighbour sums (scratch of solid_rates)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
   Real shifting_ = 0;       // particle shifting coefficient A (0 = off)

@@ -324,9 +324,10 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
   // continuity density keeps its lists across evaluations: the positions
   // at the search (HydroCpu::lists_still_hold); the search radius is in
-  // `cells`; solids add 1/H and 1/rho^2 (SolidInverses)
+  // `cells`; solids add 1/H and 1/rho^2 (SolidInverses) and the sums of
+  // the first pass (GradientSums: L, the correction's M, the nearest r^2)
   const std::size_t kept = needs.continuity_density ? sizeof(Vec<D>) : 0;
-  const std::size_t solid = needs.solid ? 2 * sizeof(Real) : 0;
+  const std::size_t solid = needs.solid ? 2 * sizeof(Real) + 2 * sizeof(Mat<D>) + sizeof(Real) : 0;
   return store + integrator + snapshot + lists + cells + kept + solid;
 }
 

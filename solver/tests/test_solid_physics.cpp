@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 
+#include "rubble/drivers/particle_rates.hpp"
 #include "rubble/physics/artificial_stress.hpp"
 #include "rubble/physics/jaumann_rate.hpp"
 #include "rubble/physics/kernel_gradient_correction.hpp"
@@ -386,6 +387,70 @@ void check_two_sides_of_a_solid_pair(int variant) {
   }
   EXPECT_GT(active, 50);   // many pairs interact ...
   EXPECT_LT(active, 400);  // ... and some lie outside both supports
+}
+
+// Pass 1 of the solid loop (velocity gradient, correction sums) on the CPU
+// adds a pair's terms to b's sums as other_side of a's: they must be the
+// terms computed from b's side, bit for bit, for every pair of a random
+// cloud (h differing by up to 2x, pairs beyond both supports included),
+// so that the pair-once loop differs from the gather loop only in the
+// order of the sums.
+template <int D>
+void check_gradient_pair_sides(bool corrected) {
+  std::mt19937 gen(5 + D + 10 * corrected);
+  std::uniform_real_distribution<double> U(0, 1), S(-1, 1);
+  const std::size_t n = 24;
+  std::vector<Vec<D>> x(n), v(n);
+  std::vector<Real> m(n), rho(n), h(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < D; ++k) {
+      x[i][k] = 1.5 * U(gen);
+      v[i][k] = S(gen);
+    }
+    m[i] = 0.5 + U(gen);
+    rho[i] = 0.8 + 0.4 * U(gen);
+    h[i] = 0.5 + 0.5 * U(gen);
+  }
+  RhsContext<D> c;
+  c.s.n = n, c.s.x = x.data(), c.s.v = v.data(), c.s.m = m.data(), c.s.rho = rho.data(), c.s.h = h.data();
+  c.kernel_correction = corrected;
+  int active = 0, pairs = 0;
+  for (std::uint32_t a = 0; a < n; ++a)
+    for (std::uint32_t b = 0; b < n; ++b) {
+      if (a == b) continue;
+      const KernelAt<D> ka = kernel_at<D>(c.kernel, h[a]), kb = kernel_at<D>(c.kernel, h[b]);
+      const GradientPairTerms<D> ab = gradient_pair_terms<D>(c, a, b, ka, x[a] - x[b]);
+      const GradientPairTerms<D> ba = gradient_pair_terms<D>(c, b, a, kb, x[b] - x[a]);
+      const GradientPairTerms<D> mirrored = other_side<D>(ab);
+      ++pairs;
+      active += ab.active;
+      ASSERT_EQ(ab.active, ba.active);
+      EXPECT_EQ(ab.r2, ba.r2);
+      if (!ab.active) continue;
+      for (int k = 0; k < D; ++k) {
+        EXPECT_EQ(mirrored.g[k], ba.g[k]);
+        EXPECT_EQ(mirrored.v_ba[k], ba.v_ba[k]);
+        EXPECT_EQ(mirrored.x_ba[k], ba.x_ba[k]);
+      }
+      GradientSums<D> want, got;
+      add_gradient_pair<D>(c, b, a, ba, want);
+      add_gradient_pair<D>(c, b, a, mirrored, got);
+      for (int i = 0; i < D; ++i)
+        for (int j = 0; j < D; ++j) {
+          EXPECT_EQ(got.L.m[i][j], want.L.m[i][j]);
+          EXPECT_EQ(got.M.m[i][j], want.M.m[i][j]);
+        }
+    }
+  EXPECT_GT(active, pairs / 10);  // many pairs interact ...
+  EXPECT_LT(active, pairs);       // ... and some lie beyond both supports
+}
+
+TEST(SolidGradient, PairTermsOfTheOtherSideAreThoseSeenFromIt) {
+  for (bool corrected : {false, true}) {
+    check_gradient_pair_sides<1>(corrected);
+    check_gradient_pair_sides<2>(corrected);
+    check_gradient_pair_sides<3>(corrected);
+  }
 }
 
 TEST(SolidPair, BothSidesFromOneEvaluationAreThePairSeenFromEachSide) {

@@ -430,36 +430,81 @@ RUBBLE_HD_INLINE SolidInverses solid_inverses_particle(const RhsContext<D>& c, s
 // With the correction it also stores K_a = C_a^T, with which pass 2 turns
 // gbar into the corrected gradient of a's stress terms (solid.hpp), so that
 // Hooke's law, continuity and the energy equation share one strain rate.
-// Returns false when the correction matrix was ill-conditioned (identity used).
-template <int D, class Each>
-RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
-  const StoreView<D>& s = c.s;
+//
+// The neighbour sums of one particle: L_a = sum_b V_b (v_b - v_a) (x) gbar,
+// the correction's M_a = sum_b V_b (x_b - x_a) (x) gbar (V_b = m_b/rho_w,
+// solid.hpp: velocity_gradient_pair_term) and the nearest neighbour's
+// squared distance (artificial stress).
+template <int D>
+struct GradientSums {
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
-  Real r2_min = std::numeric_limits<Real>::max();  // nearest neighbour (artificial stress), squared
-  const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, a).inv_h);
-  each([&](std::uint32_t b) {
-    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
-    const Real r2 = norm2(dx);
-    if (r2 > Real(0) && r2 < r2_min) r2_min = r2;
-    // a candidate beyond both supports (search skin, GPU cell) adds nothing:
-    // skip it before the square root
-    const Real h_max = s.h[a] > s.h[b] ? s.h[a] : s.h[b];
-    if (r2 <= Real(0) || r2 >= h_max * h_max) return;
-    const Real r = std::sqrt(r2);
-    if (r >= s.h[a] && r >= s.h[b]) return;
-    const Vec<D> g = Real(0.5) * (kernel_grad<D>(ka, dx, r) +
-                                  kernel_grad<D>(kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, b).inv_h), dx, r));
-    // volume weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp)
-    const Real rho_w = c.kernel_correction ? s.rho[a] : s.rho[b];
-    L += velocity_gradient_pair_term<D>(s.m[b], rho_w, seen_velocity<D>(s, a, b) - s.v[a], g);
-    if (c.kernel_correction) M += correction_pair_term<D>(s.m[b], rho_w, -dx, g);
-  });
+  Real r2_min = std::numeric_limits<Real>::max();
+};
+
+// One pair of pass 1 as seen from a: gbar, v_b - v_a (the velocity a sees
+// of b) and x_b - x_a. Seen from b all three change sign, exactly, so the
+// CPU's pair-once loop adds the negated vectors to b's sums (other_side).
+// inactive: beyond both supports or r = 0; r2 = |dx|^2 either way (the
+// nearest-neighbour distance).
+template <int D>
+struct GradientPairTerms {
+  bool active = false;
+  Real r2 = 0;
+  Vec<D> g, v_ba, x_ba;
+};
+
+template <int D>
+RUBBLE_HD_INLINE GradientPairTerms<D> gradient_pair_terms(const RhsContext<D>& c, std::uint32_t a, std::uint32_t b,
+                                                          const KernelAt<D>& ka, const Vec<D>& dx) {
+  const StoreView<D>& s = c.s;
+  GradientPairTerms<D> t;
+  t.r2 = norm2(dx);
+  // a candidate beyond both supports (search skin, GPU cell) adds nothing:
+  // skip it before the square root
+  const Real h_max = s.h[a] > s.h[b] ? s.h[a] : s.h[b];
+  if (t.r2 <= Real(0) || t.r2 >= h_max * h_max) return t;
+  const Real r = std::sqrt(t.r2);
+  if (r >= s.h[a] && r >= s.h[b]) return t;
+  t.active = true;
+  t.g = Real(0.5) * (kernel_grad<D>(ka, dx, r) +
+                     kernel_grad<D>(kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, b).inv_h), dx, r));
+  t.v_ba = seen_velocity<D>(s, a, b) - s.v[a];
+  t.x_ba = -dx;
+  return t;
+}
+
+template <int D>
+RUBBLE_HD_INLINE GradientPairTerms<D> other_side(GradientPairTerms<D> t) {
+  t.g = -t.g;
+  t.v_ba = -t.v_ba;
+  t.x_ba = -t.x_ba;
+  return t;
+}
+
+// Adds a pair's terms to a's sums, b being the other particle: volume
+// weight m_b/rho_b, or m_b/rho_a with the correction (solid.hpp).
+template <int D>
+RUBBLE_HD_INLINE void add_gradient_pair(const RhsContext<D>& c, std::uint32_t a, std::uint32_t b,
+                                        const GradientPairTerms<D>& t, GradientSums<D>& sums) {
+  const StoreView<D>& s = c.s;
+  const Real rho_w = c.kernel_correction ? s.rho[a] : s.rho[b];
+  sums.L += velocity_gradient_pair_term<D>(s.m[b], rho_w, t.v_ba, t.g);
+  if (c.kernel_correction) sums.M += correction_pair_term<D>(s.m[b], rho_w, t.x_ba, t.g);
+}
+
+// From a's complete sums: C_a and K_a, L_a, dS/dt, the damage rate and R_a.
+// Returns false when the correction matrix was ill-conditioned (identity used).
+template <int D>
+RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_t a, const GradientSums<D>& sums) {
+  const StoreView<D>& s = c.s;
+  Mat<D> L = sums.L;
   // sqrt is monotonic and correctly rounded: the nearest distance itself
-  const Real r_min = r2_min < std::numeric_limits<Real>::max() ? std::sqrt(r2_min) : r2_min;
+  const Real r_min =
+      sums.r2_min < std::numeric_limits<Real>::max() ? std::sqrt(sums.r2_min) : std::numeric_limits<Real>::max();
   bool well_conditioned = true;
   if (c.kernel_correction) {
     Mat<D> C;
-    well_conditioned = correction_matrix<D>(M, kCorrectionMinDet, C);
+    well_conditioned = correction_matrix<D>(sums.M, kCorrectionMinDet, C);
     L = L * C;  // = sum_b V_b v_ba (x) (C^T gbar)
     if (s.corr_K) s.corr_K[a] = transpose(C);
   }
@@ -476,6 +521,21 @@ RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint3
                      : Mat<D>::zero();
   }
   return well_conditioned;
+}
+
+// Pass 1 of particle a over all its neighbours (the gather form: the GPU,
+// and the CPU with free-slip walls; the CPU otherwise sums each pair once,
+// HydroCpu::solid_rates).
+template <int D, class Each>
+RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  GradientSums<D> sums;
+  const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, a).inv_h);
+  each([&](std::uint32_t b) {
+    const GradientPairTerms<D> t = gradient_pair_terms<D>(c, a, b, ka, c.domain.separation(c.s.x[a], c.s.x[b]));
+    if (t.r2 > Real(0) && t.r2 < sums.r2_min) sums.r2_min = t.r2;
+    if (t.active) add_gradient_pair<D>(c, a, b, t, sums);
+  });
+  return solid_gradient_finish<D>(c, a, sums);
 }
 
 template <int D>
