@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #if defined(_OPENMP)
 #include <omp.h>
@@ -165,6 +166,20 @@ struct ListNeighbors {
   }
 };
 
+// The pair-once loops (rates, solid_rates): inside a parallel region, the
+// contiguous range [lo, hi) of the n particles (Morton order) that this
+// thread owns.
+namespace {
+std::pair<std::size_t, std::size_t> own_range(std::size_t n) {
+#if defined(_OPENMP)
+  const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
+#else
+  const std::size_t threads = 1, t = 0;
+#endif
+  return {n * t / threads, n * (t + 1) / threads};
+}
+}  // namespace
+
 template <int D>
 RhsContext<D> HydroCpu<D>::context() {
   RhsContext<D> c;
@@ -317,12 +332,7 @@ void HydroCpu<D>::rates() {
   const bool continuity = !c.summation;
 #pragma omp parallel
   {
-#if defined(_OPENMP)
-    const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
-#else
-    const std::size_t threads = 1, t = 0;
-#endif
-    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    const auto [lo, hi] = own_range(n);
     for (std::size_t a = lo; a < hi; ++a) {
       s.dvdt[a] = Vec<D>::zero();
       s.dudt[a] = Real(0);
@@ -405,12 +415,7 @@ void HydroCpu<D>::solid_rates() {
   grad_sums_.resize(n);
 #pragma omp parallel reduction(+ : fallbacks)
   {
-#if defined(_OPENMP)
-    const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
-#else
-    const std::size_t threads = 1, t = 0;
-#endif
-    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    const auto [lo, hi] = own_range(n);
     for (std::size_t a = lo; a < hi; ++a) grad_sums_[a] = GradientSums<D>{};
     for (std::size_t a = lo; a < hi; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
@@ -444,12 +449,7 @@ void HydroCpu<D>::solid_rates() {
   // its range, so the thread then takes its porous particles' dalpha/dt.
 #pragma omp parallel
   {
-#if defined(_OPENMP)
-    const std::size_t threads = std::size_t(omp_get_num_threads()), t = std::size_t(omp_get_thread_num());
-#else
-    const std::size_t threads = 1, t = 0;
-#endif
-    const std::size_t lo = n * t / threads, hi = n * (t + 1) / threads;
+    const auto [lo, hi] = own_range(n);
     for (std::size_t a = lo; a < hi; ++a) {
       s.dvdt[a] = Vec<D>::zero();
       s.dudt[a] = Real(0);

@@ -185,75 +185,65 @@ TEST(Run, SmoothingLengthIterationStopsAtItsTolerance) {
   }
 }
 
-// The CPU hydro force loop computes each pair once within a thread's range
-// of particles and from each side across ranges (HydroCpu::rates), so the
-// thread count changes only the order of the sums: a 3-D Sedov blast run on
-// 1 and on 3 threads (uneven ranges) agrees to rounding, ~1e-15 of each
-// field's scale after 0.01 time units (the bound 1e-12 leaves room for its
-// growth; a pair counted twice or missed changes the fields at the 1e-3
-// level).
+// The CPU force loops compute each pair once within a thread's range of
+// particles and from each side across ranges (HydroCpu::rates, both passes
+// of HydroCpu::solid_rates), so the thread count changes only the order of
+// the sums: a run on 1 and on 3 threads (uneven ranges) agrees to rounding
+// in every field (relative to the field's scale); a pair counted twice or
+// missed changes the fields at the 1e-3 level or more.
 #if defined(_OPENMP)
+FinalState run_on_threads(const std::string& scene, const std::vector<std::string>& sets, int threads) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(threads);
+  const FinalState fs = run_scene(load_scene_file(std::string(RUBBLE_SOURCE_DIR) + scene, sets), in_memory());
+  omp_set_num_threads(saved);
+  return fs;
+}
+
+double worst_relative_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double scale = 0, diff = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    scale = std::max(scale, std::fabs(a[i]));
+    diff = std::max(diff, std::fabs(a[i] - b[i]));
+  }
+  return diff / scale;
+}
+
+// A 3-D Sedov blast, 0.01 time units: ~1e-15 of each field's scale (the
+// bound 1e-12 leaves room for its growth).
 TEST(Run, ThreadCountChangesOnlyTheRounding) {
-  const std::string path = std::string(RUBBLE_SOURCE_DIR) + "/verification/sedov_taylor/sedov_3d.toml";
   const std::vector<std::string> sets = {"bodies.0.spacing=0.0625", "energy_deposits.0.radius=0.3",
                                          "simulation.end_time=0.01"};
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const FinalState one = run_scene(load_scene_file(path, sets), in_memory());
-  omp_set_num_threads(3);
-  const FinalState three = run_scene(load_scene_file(path, sets), in_memory());
-  omp_set_num_threads(saved);
+  const FinalState one = run_on_threads("/verification/sedov_taylor/sedov_3d.toml", sets, 1);
+  const FinalState three = run_on_threads("/verification/sedov_taylor/sedov_3d.toml", sets, 3);
   ASSERT_EQ(one.u.size(), three.u.size());
   ASSERT_EQ(one.steps, three.steps);
-  auto worst = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double scale = 0, diff = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      scale = std::max(scale, std::fabs(a[i]));
-      diff = std::max(diff, std::fabs(a[i] - b[i]));
-    }
-    return diff / scale;
-  };
-  EXPECT_LE(worst(one.x, three.x), 1e-12);
-  EXPECT_LE(worst(one.v, three.v), 1e-12);
-  EXPECT_LE(worst(one.u, three.u), 1e-12);
-  EXPECT_LE(worst(one.rho, three.rho), 1e-12);
+  EXPECT_LE(worst_relative_difference(one.x, three.x), 1e-12);
+  EXPECT_LE(worst_relative_difference(one.v, three.v), 1e-12);
+  EXPECT_LE(worst_relative_difference(one.u, three.u), 1e-12);
+  EXPECT_LE(worst_relative_difference(one.rho, three.rho), 1e-12);
   EXPECT_GT(*std::max_element(one.v.begin(), one.v.end()), 0.1);  // the blast moves the gas
 }
 
-// The same for the solid force loop (HydroCpu::solid_rates, pass 2 each
-// pair once): the oscillating plate (kernel-gradient correction, clumping
-// artificial stress, an evolving clamp) started with v_y = 0.5 m/s against
-// its clamp, ~1000 steps on 1 and 3 threads. Rounding grows to ~1e-13 of
-// each field's scale (measured 2e-13 for p between the gather and the
-// pair-once loop over 1581 steps); a pair counted twice or missed moves
-// the stress at the 1e-2 level within a step.
+// The oscillating plate (kernel-gradient correction, clumping artificial
+// stress, an evolving clamp) started with v_y = 0.5 m/s against its clamp,
+// ~1000 steps: rounding grows to ~1e-13 of each field's scale (measured
+// 2e-13 for p between the gather and the pair-once loop over 1581 steps).
 TEST(Run, ThreadCountChangesOnlyTheRoundingOfASolid) {
-  const std::string path = std::string(RUBBLE_SOURCE_DIR) + "/validation/oscillating_plate/oscillating_plate.toml";
   const std::vector<std::string> sets = {"simulation.end_time=0.004", "bodies.0.velocity=[0.0, 0.5]",
                                          "output.interval=0.004"};
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const FinalState one = run_scene(load_scene_file(path, sets), in_memory());
-  omp_set_num_threads(3);
-  const FinalState three = run_scene(load_scene_file(path, sets), in_memory());
-  omp_set_num_threads(saved);
+  const FinalState one = run_on_threads("/validation/oscillating_plate/oscillating_plate.toml", sets, 1);
+  const FinalState three = run_on_threads("/validation/oscillating_plate/oscillating_plate.toml", sets, 3);
   ASSERT_EQ(one.p.size(), three.p.size());
   ASSERT_EQ(one.steps, three.steps);
   EXPECT_GT(one.steps, 500);
-  auto worst = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double scale = 0, diff = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      scale = std::max(scale, std::fabs(a[i]));
-      diff = std::max(diff, std::fabs(a[i] - b[i]));
-    }
-    return diff / scale;
-  };
-  EXPECT_LE(worst(one.x, three.x), 1e-11);
-  EXPECT_LE(worst(one.v, three.v), 1e-11);
-  EXPECT_LE(worst(one.p, three.p), 1e-11);
-  EXPECT_LE(worst(one.rho, three.rho), 1e-11);
+  EXPECT_LE(worst_relative_difference(one.x, three.x), 1e-11);
+  EXPECT_LE(worst_relative_difference(one.v, three.v), 1e-11);
+  EXPECT_LE(worst_relative_difference(one.p, three.p), 1e-11);
+  EXPECT_LE(worst_relative_difference(one.rho, three.rho), 1e-11);
   EXPECT_GT(*std::max_element(one.p.begin(), one.p.end()), 1e3);  // the clamp loads the plate
 }
+#endif
 
 // Continuity density keeps the neighbour lists across evaluations while
 // every interacting pair is still listed (HydroCpu::lists_still_hold).
@@ -297,4 +287,3 @@ TEST(Run, KeptNeighbourListsGiveTheSameRun) {
        "simulation.density=\"continuity\""},
       1.0);
 }
-#endif
