@@ -373,9 +373,11 @@ void HydroCpu<D>::rates() {
 }
 
 // Feature set Solid (any material with a shear modulus; continuity density).
-// Pass 1, per particle: the velocity gradient L_a (optionally with the
-// kernel-gradient correction), the Jaumann stress rate and the artificial
-// stress tensor R_a. Pass 2, per pair: solid_pair (full stress).
+// Pass 1: the velocity gradient L_a (optionally with the kernel-gradient
+// correction), the Jaumann stress rate and the artificial stress tensor
+// R_a. Pass 2: the pair forces from the full stress (solid_pair). Both
+// passes take each pair once within a thread's range, as rates() does,
+// except with free-slip walls (the gather loops the CUDA backend runs).
 // Both passes divide by every neighbour's H (kernel) and pass 2 by its
 // rho^2 (stress term): these inverses are taken once per particle first
 // (solid_inverses; the same values as computed at each pair, so the
