@@ -332,7 +332,10 @@ void HydroCpu<D>::rates() {
   const bool continuity = !c.summation;
 #pragma omp parallel
   {
-    const auto [lo, hi] = own_range(n);
+    // plain variables, not a structured binding: clang before 16 cannot
+    // capture a binding into the lambdas and OpenMP regions below
+    const auto range = own_range(n);
+    const std::size_t lo = range.first, hi = range.second;
     for (std::size_t a = lo; a < hi; ++a) {
       s.dvdt[a] = Vec<D>::zero();
       s.dudt[a] = Real(0);
@@ -417,7 +420,10 @@ void HydroCpu<D>::solid_rates() {
   grad_sums_.resize(n);
 #pragma omp parallel reduction(+ : fallbacks)
   {
-    const auto [lo, hi] = own_range(n);
+    // plain variables, not a structured binding: clang before 16 cannot
+    // capture a binding into the lambdas and OpenMP regions below
+    const auto range = own_range(n);
+    const std::size_t lo = range.first, hi = range.second;
     for (std::size_t a = lo; a < hi; ++a) grad_sums_[a] = GradientSums<D>{};
     for (std::size_t a = lo; a < hi; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
@@ -451,7 +457,10 @@ void HydroCpu<D>::solid_rates() {
   // its range, so the thread then takes its porous particles' dalpha/dt.
 #pragma omp parallel
   {
-    const auto [lo, hi] = own_range(n);
+    // plain variables, not a structured binding: clang before 16 cannot
+    // capture a binding into the lambdas and OpenMP regions below
+    const auto range = own_range(n);
+    const std::size_t lo = range.first, hi = range.second;
     for (std::size_t a = lo; a < hi; ++a) {
       s.dvdt[a] = Vec<D>::zero();
       s.dudt[a] = Real(0);
