@@ -197,6 +197,7 @@ RhsContext<D> HydroCpu<D>::context() {
   c.h_tolerance = h_tolerance_;
   c.body_force = g_;
   c.has_body_force = body_force_;
+  c.stagger_dt = stagger_dt_;
   return c;
 }
 
@@ -394,8 +395,34 @@ void HydroCpu<D>::solid_rates() {
 #pragma omp parallel for if (n > 4096)
   for (std::size_t a = 0; a < n; ++a) solid_inv_[a] = solid_inverses(ps_.h[a], ps_.rho[a]);
   c.solid_inv = solid_inv_.data();
+  const bool staggered = c.stagger_dt > Real(0);
+  if (staggered) {
+    stagger_Lm_.resize(n);
+    stagger_du_.resize(n);
+    c.stagger_Lm = stagger_Lm_.data();
+    c.stagger_du = stagger_du_.data();
+    if (c.art_R) {
+      as_chi_.resize(n);
+      c.as_chi = as_chi_.data();
+    }
+  }
   const StoreView<D>& s = c.s;
   std::int64_t fallbacks = 0;
+  // the staggered stress update, between the passes (leapfrog.hpp); pass 2
+  // then divides by the new densities
+  auto staggered_update = [&] {
+    if (!staggered) return;
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) {
+      staggered_update_particle<D>(c, static_cast<std::uint32_t>(a), plasticity_);
+      solid_inv_[a] = solid_inverses(ps_.h[a], ps_.rho[a]);
+    }
+  };
+  auto staggered_energy = [&] {
+    if (!staggered) return;
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) staggered_energy_particle<D>(c, static_cast<std::uint32_t>(a));
+  };
   if (s.wall_normal) {  // free-slip walls: the velocity seen of a wall particle depends on who looks
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : fallbacks)
     for (std::size_t a = 0; a < n; ++a) {
@@ -404,11 +431,13 @@ void HydroCpu<D>::solid_rates() {
     }
     fallbacks_last_ = fallbacks;
     fallbacks_total_ += fallbacks;
+    staggered_update();
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::size_t a = 0; a < n; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
       solid_rates_particle<D>(c, ia, ListNeighbors{nbrs_, ia});
     }
+    staggered_energy();
     return;
   }
   // Pass 1 each pair once (the ranges of the force loops below): a pair
@@ -449,6 +478,7 @@ void HydroCpu<D>::solid_rates() {
   }
   fallbacks_last_ = fallbacks;
   fallbacks_total_ += fallbacks;
+  staggered_update();
   // Pass 2 each pair once, as HydroCpu::rates: a contiguous Morton range
   // per thread, a pair inside the range computed once from its lower index
   // (solid_pair_rates_a and _b), a pair across ranges from each side for
@@ -503,6 +533,7 @@ void HydroCpu<D>::solid_rates() {
       for (std::size_t a = lo; a < hi; ++a)
         s.dalphadt[a] = porosity_rate_particle<D>(c, static_cast<std::uint32_t>(a), s.drhodt[a], s.dudt[a]);
   }
+  staggered_energy();
 }
 
 // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp).
@@ -628,6 +659,16 @@ void HydroCpu<D>::evaluate() {
   if (body_force_) body_force();
   if (!ps_.boundary.empty()) hold_boundaries();
   if (xsph_epsilon_ > Real(0)) xsph_velocity();
+}
+
+template <int D>
+void HydroCpu<D>::evaluate_staggered(Real dt) {
+  struct Reset {
+    Real& v;
+    ~Reset() { v = Real(0); }
+  } reset{stagger_dt_};
+  stagger_dt_ = solid_ ? dt : Real(0);
+  evaluate();
 }
 
 template <int D>

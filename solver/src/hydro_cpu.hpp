@@ -38,6 +38,12 @@ class HydroCpu {
   // Density (and h), pressure, sound speed, and all time derivatives at the
   // current state of the store.
   void evaluate();
+  // The same, for a leapfrog step with the staggered stress update
+  // (simulation.stress_update = "staggered", leapfrog.hpp): the store holds
+  // v_{1/2} and the step's starting S and rho; between the two solid passes
+  // S and rho advance by dt with pass 1's rates (staggered_update_particle),
+  // so the forces are those of the step's end.
+  void evaluate_staggered(Real dt);
   // After the integrator's last update of a step: porous states back onto
   // the loading envelope, and the plastic return mapping (with plastic-strain
   // accumulation) at the step's final state. Nothing when neither is used.
@@ -63,6 +69,9 @@ class HydroCpu {
     lists_in_order_ = false;
     std::vector<SolidInverses>().swap(solid_inv_);
     std::vector<GradientSums<D>>().swap(grad_sums_);
+    std::vector<Mat<D>>().swap(stagger_Lm_);
+    std::vector<Real>().swap(stagger_du_);
+    std::vector<Real>().swap(as_chi_);
   }
   // Calls of evaluate() so far (each evaluates every particle once).
   std::int64_t evaluations() const { return evaluations_; }
@@ -115,6 +124,10 @@ class HydroCpu {
   bool kernel_correction_ = false;
   bool artificial_stress_ = false;
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
+  Real stagger_dt_ = 0;         // inside evaluate_staggered: its dt (0 otherwise)
+  std::vector<Real> as_chi_;    // evaluate_staggered with artificial stress: chi_a (scratch)
+  std::vector<Mat<D>> stagger_Lm_;  // evaluate_staggered: pass 1's mass-weighted gradient (scratch)
+  std::vector<Real> stagger_du_;    // evaluate_staggered: the energy rate's correction (scratch)
   std::vector<SolidInverses> solid_inv_;  // solids: 1/H, 1/rho^2 per particle (scratch of solid_rates)
   std::vector<GradientSums<D>> grad_sums_;  // solids: pass 1's neighbour sums (scratch of solid_rates)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;

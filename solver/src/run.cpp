@@ -289,6 +289,7 @@ class CpuStepper {
   CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed, bool keep_lists)
       : ps_(ps), sys_(scene, ps, domain) {
     sys_.keep_neighbour_lists(keep_lists);
+    staggered_ = scene.simulation.stress_update == StressUpdate::Staggered && sys_.solid();
     for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
     if (resumed) return;
     sys_.sort_particles();
@@ -296,7 +297,7 @@ class CpuStepper {
   }
   void sort_particles() { sys_.sort_particles(); }
   double dt_limit() { return double(sys_.dt_limit()); }
-  void leapfrog(double dt) { leapfrog_step<D>(sys_, ps_, Real(dt)); }
+  void leapfrog(double dt) { leapfrog_step<D>(sys_, ps_, Real(dt), staggered_); }
   Rk2Result rk2(double dt, double tol, double dt_min) {
     return rk2_adaptive_step<D>(sys_, ps_, Real(dt), Real(tol), Real(dt_min));
   }
@@ -355,6 +356,7 @@ class CpuStepper {
   ParticleStore<D> good_;  // keep_good()
   HydroCpu<D> sys_;
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity (its potential energy)
+  bool staggered_ = false;     // solids: simulation.stress_update = "staggered"
 };
 
 // "particle 17 of bodies[1] (id 417) at x = (0.1, 0.2)": a particle as the

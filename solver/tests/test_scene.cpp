@@ -289,6 +289,55 @@ TEST(Scene, HToleranceOutsideItsRange) {
                "in [0, 0.01]");
 }
 
+// simulation.stress_update (leapfrog.hpp): "predicted" by default,
+// "staggered" for a solid under leapfrog; every combination it does not
+// support is refused, naming the key.
+TEST(Scene, StressUpdate) {
+  const std::string solid = R"(
+[simulation]
+dimension = 2
+end_time = 0.1
+integrator = "leapfrog"
+
+[materials.rock]
+eos = "murnaghan"
+murnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }
+shear_modulus = 0.5
+
+[[bodies]]
+shape = "box"
+material = "rock"
+min = [0.0, 0.0]
+max = [1.0, 0.4]
+spacing = 0.05
+density = 1.0
+internal_energy = 0.0
+)";
+  EXPECT_EQ(parse_scene(solid, "test.toml").simulation.stress_update, rubble::StressUpdate::Predicted);
+  const std::string staggered = edit(solid, "integrator = \"leapfrog\"", "integrator = \"leapfrog\"\nstress_update = \"staggered\"");
+  EXPECT_EQ(parse_scene(staggered, "test.toml").simulation.stress_update, rubble::StressUpdate::Staggered);
+  const std::string key = "simulation.stress_update";
+  expect_error(edit(staggered, "staggered", "stagered"), key, "staggered");
+  expect_error(edit(staggered, "integrator = \"leapfrog\"", "integrator = \"rk2_adaptive\""), key, "leapfrog");
+  expect_error(edit(staggered, "shear_modulus = 0.5", ""), key, "no material has a shear modulus");
+  expect_error(edit(staggered, "shear_modulus = 0.5",
+                    "shear_modulus = 0.5\ndamage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0 }"),
+               key, "porous or damaged");
+  expect_error(staggered + R"(
+[[bodies]]
+shape = "box"
+material = "rock"
+boundary = "fixed"
+boundary_state = "extrapolated"
+min = [0.0, -0.1]
+max = [1.0, 0.0]
+spacing = 0.05
+density = 1.0
+internal_energy = 0.0
+)",
+               key, "extrapolated");
+}
+
 TEST(Scene, UnknownMaterialName) {
   expect_error(edit(kMinimal, "material = \"gas\"", "material = \"gsa\""), "bodies[0].material",
                "unknown material 'gsa'");

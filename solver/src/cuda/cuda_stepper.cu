@@ -731,9 +731,15 @@ struct CudaStepper<D>::Impl {
   Real hfact, courant, force_factor, h_tolerance, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
   bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
+  bool staggered = false;  // solids: simulation.stress_update = "staggered" (leapfrog.hpp)
+  Real stagger_dt = 0;     // inside a staggered evaluation: its dt
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
   GravityConfig gravity;
   DeviceArray<Mat<D>> art_R;
+  // staggered evaluations: pass 1's mass-weighted gradient, the energy
+  // rate's correction, and chi_a with artificial stress (RhsContext)
+  DeviceArray<Mat<D>> stagger_Lm;
+  DeviceArray<Real> stagger_du, as_chi;
   DeviceArray<Real> search_radius, eps;
   DeviceArray<int> flags;
   // grid cell list
@@ -792,6 +798,7 @@ struct CudaStepper<D>::Impl {
     damage = f.damage;
     wall_extrapolation = f.wall_extrapolation;
     body_force = f.body_force;
+    staggered = scene.simulation.stress_update == StressUpdate::Staggered && solid;
     for (int k = 0; k < D; ++k) g[k] = Real(scene.simulation.gravity[k]);
     materials.resize(materials_host.size());
     RUBBLE_CUDA(cudaMemcpy(materials.data(), materials_host.data(), materials_host.size() * sizeof(MaterialParams),
@@ -828,6 +835,12 @@ struct CudaStepper<D>::Impl {
     c.h_tolerance = h_tolerance;
     c.body_force = g;
     c.has_body_force = body_force;
+    c.stagger_dt = stagger_dt;
+    if (stagger_dt > Real(0)) {
+      c.stagger_Lm = stagger_Lm.data();
+      c.stagger_du = stagger_du.data();
+      c.as_chi = as_chi.n ? as_chi.data() : nullptr;
+    }
     return c;
   }
 
@@ -987,11 +1000,20 @@ struct CudaStepper<D>::Impl {
         each.a = std::uint32_t(i);
         if (!solid_gradient_particle<D>(c, std::uint32_t(i), each)) atomicAdd(fb, 1ull);  // rare
       });
+      if (stagger_dt > Real(0)) {  // the staggered stress update between the passes (leapfrog.hpp)
+        const bool plastic = plasticity;
+        for_each_index("staggered stress update", count, [=] __device__(std::size_t i) {
+          staggered_update_particle<D>(c, std::uint32_t(i), plastic);
+        });
+      }
       for_each_index("solid rates", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
         each.a = std::uint32_t(i);
         solid_rates_particle<D>(c, std::uint32_t(i), each);
       });
+      if (stagger_dt > Real(0))
+        for_each_index("staggered energy rate", count,
+                       [=] __device__(std::size_t i) { staggered_energy_particle<D>(c, std::uint32_t(i)); });
     } else {
       for_each_index("hydro rates", count, [=] __device__(std::size_t i) {
         GridNeighbors<D> each = g;
@@ -1118,8 +1140,8 @@ struct CudaStepper<D>::Impl {
     const StoreView<D> s = store.view();
     v_half.resize(count);
     u_half.resize(count);
-    if (s.drhodt) rho_half.resize(count);
-    if (s.dSdt) S_half.resize(count);
+    if (s.drhodt && !staggered) rho_half.resize(count);
+    if (s.dSdt && !staggered) S_half.resize(count);
     if (s.dalphadt) {
       alpha_half.resize(count);
       alpha_start.resize(count);
@@ -1128,14 +1150,29 @@ struct CudaStepper<D>::Impl {
     if (s.ddamage_root_dt) damage_half.resize(count);
     const LeapfrogHalf<D> half{v_half.data(),
                                u_half.data(),
-                               s.drhodt ? rho_half.data() : nullptr,
-                               s.dSdt ? S_half.data() : nullptr,
+                               s.drhodt && !staggered ? rho_half.data() : nullptr,
+                               s.dSdt && !staggered ? S_half.data() : nullptr,
                                s.dalphadt ? alpha_half.data() : nullptr,
-                               s.ddamage_root_dt ? damage_half.data() : nullptr};
+                               s.ddamage_root_dt ? damage_half.data() : nullptr,
+                               staggered};
     const Box<D> dom = domain;
     for_each_index("leapfrog kick-drift", count,
                    [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
-    evaluate();
+    if (staggered) {
+      if (stagger_Lm.n != count) stagger_Lm.resize(count);
+      if (stagger_du.n != count) stagger_du.resize(count);
+      if (art_R.n && as_chi.n != count) as_chi.resize(count);
+      stagger_dt = dt;
+      try {
+        evaluate();
+      } catch (...) {
+        stagger_dt = 0;
+        throw;
+      }
+      stagger_dt = 0;
+    } else {
+      evaluate();
+    }
     for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
     end_step(s.dalphadt ? alpha_start.data() : nullptr, dt);
   }

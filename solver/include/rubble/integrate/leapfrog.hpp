@@ -10,11 +10,32 @@
 //   v_{n+1} = v_{1/2} + dt/2 a_{n+1}
 //   end of step: the system's end_step(alpha_n) (porous states back onto the
 //   loading envelope from alpha_n; plastic return, when a material yields)
+// Solids with simulation.stress_update = "staggered" advance S and rho as
+// the central-difference scheme of explicit structural dynamics does
+// (Belytschko, Liu & Moran 2000, Nonlinear Finite Elements for Continua and
+// Structures, §6.2.2: the stress at t_{n+1} from the strain rate of
+// v_{n+1/2}, before the forces of t_{n+1}):
+//
+//   v_{1/2} = v_n + dt/2 a_n,  x_{n+1} = x_n + dt v_{1/2}
+//   pass 1 with v_{1/2}: L, dS/dt, drho/dt;  S_{n+1} = S_n + dt dS/dt, rho likewise
+//   pass 2 with S_{n+1}, p(rho_{n+1}) (and v_{1/2} for the viscosity): a_{n+1}
+//   v_{n+1} = v_{1/2} + dt/2 a_{n+1}
+//   u_{n+1} = u_n + dt du/dt, du/dt the step's trapezoidal work (the
+//             evaluation's; predicted as u_n + dt (du/dt)_n for its EOS)
+//
+// The predicted form above is, for the linear elastic waves of a solid (S
+// and rho are driven by v, v by S and rho), a two-stage explicit scheme
+// whose amplification factor exceeds 1 by ~(omega dt)^4/8 for a mode of
+// frequency omega: without viscosity a resting lattice's fastest modes grow
+// (docs/physics.md, "Stress update"). The staggered form is symplectic for
+// that linear system (|g| = 1 for omega dt < 2), at the same one evaluation
+// per step.
 // The distention alpha of porous materials is evolved like u, and kept >= 1
 // (integrated_alpha); its rate is <= 0, so alpha never rises. The damage
 // root delta = D^(1/d) of damaged solids likewise, kept <= 1 with a rate >= 0
 // (integrated_damage_root), and held to its cap at the end of the step.
 #include <cstddef>
+#include <stdexcept>
 #include <vector>
 
 #include "rubble/core/box.hpp"
@@ -35,6 +56,10 @@ struct LeapfrogHalf {
   Mat<D>* S = nullptr;
   Real* alpha = nullptr;
   Real* damage_root = nullptr;
+  // the staggered stress update: S and rho are not kicked (S, rho are
+  // nullptr here); the evaluation sees v_{1/2} and advances them itself,
+  // and u (u_n here) advances by dt du/dt at the end of the step
+  bool staggered = false;
 };
 
 // alpha0 + w d alpha/dt, never below 1 (full compaction); w >= 0 and
@@ -49,7 +74,7 @@ template <int D>
 RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>& half_state, std::size_t i, Real dt) {
   const Real half = Real(0.5) * dt;
   s.v[i] = half_state.v[i] + half * s.dvdt[i];
-  s.u[i] = half_state.u[i] + half * s.dudt[i];
+  s.u[i] = half_state.u[i] + (half_state.staggered ? dt : half) * s.dudt[i];
   if (half_state.rho) s.rho[i] = half_state.rho[i] + half * s.drhodt[i];
   if (half_state.S) s.S[i] = half_state.S[i] + half * s.dSdt[i];
   if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
@@ -65,7 +90,7 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
                                           std::size_t i, Real dt) {
   const Real half = Real(0.5) * dt;
   half_state.v[i] = s.v[i] + half * s.dvdt[i];
-  half_state.u[i] = s.u[i] + half * s.dudt[i];
+  half_state.u[i] = half_state.staggered ? s.u[i] : s.u[i] + half * s.dudt[i];
   if (half_state.rho) half_state.rho[i] = s.rho[i] + half * s.drhodt[i];
   if (half_state.S) half_state.S[i] = s.S[i] + half * s.dSdt[i];
   if (half_state.alpha) half_state.alpha[i] = integrated_alpha(s.alpha[i], half, s.dalphadt[i]);
@@ -74,15 +99,25 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   // XSPH (when on) adds its correction, evaluated at the start of the step
   const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
   s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
+  if (half_state.staggered) {  // the evaluation sees v_{1/2}, and S, rho of the step's start
+    s.v[i] = half_state.v[i];
+    s.u[i] = half_state.u[i] + dt * s.dudt[i];
+    if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
+    if (half_state.damage_root)
+      s.damage_root[i] = integrated_damage_root(half_state.damage_root[i], half, s.ddamage_root_dt[i]);
+    return;
+  }
   leapfrog_kick<D>(s, half_state, i, dt);  // predicted end-of-step values
 }
 
+// staggered: the staggered stress update (solids; the system's
+// evaluate_staggered(dt) advances S and rho between its passes).
 template <int D, class System>
-void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
+void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt, bool staggered = false) {
   const std::size_t n = ps.n;
   std::vector<Vec<D>> v_half(n);
-  std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() ? 0 : n);
-  std::vector<Mat<D>> S_half(ps.dSdt.empty() ? 0 : n);  // solids: the deviatoric stress
+  std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() || staggered ? 0 : n);
+  std::vector<Mat<D>> S_half(ps.dSdt.empty() || staggered ? 0 : n);  // solids: the deviatoric stress
   std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
   const std::vector<Real> alpha_start = ps.alpha;               // and its value at the start (end_step)
   std::vector<Real> damage_half(ps.ddamage_root_dt.empty() ? 0 : n);  // damaged solids: delta = D^(1/d)
@@ -91,12 +126,19 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt) {
                              rho_half.empty() ? nullptr : rho_half.data(),
                              S_half.empty() ? nullptr : S_half.data(),
                              alpha_half.empty() ? nullptr : alpha_half.data(),
-                             damage_half.empty() ? nullptr : damage_half.data()};
+                             damage_half.empty() ? nullptr : damage_half.data(),
+                             staggered};
   const StoreView<D> s = ps.view();
   const Box<D> domain = sys.domain();
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) leapfrog_kick_drift<D>(s, half, domain, i, dt);
-  sys.evaluate();
+  if constexpr (requires { sys.evaluate_staggered(dt); }) {
+    if (staggered) sys.evaluate_staggered(dt);
+    else sys.evaluate();
+  } else {
+    if (staggered) throw std::logic_error("leapfrog_step: this system has no staggered evaluation");
+    sys.evaluate();
+  }
 #pragma omp parallel for if (n > 4096)
   for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
   sys.end_step(alpha_start.empty() ? nullptr : alpha_start.data(), dt);

@@ -16,6 +16,11 @@ namespace rubble {
 
 enum class DensityForm : int { Summation = 0, Continuity = 1 };
 enum class Integrator : int { RK2Adaptive = 0, Leapfrog = 1 };
+// How leapfrog advances a solid's deviatoric stress and density
+// (simulation.stress_update; leapfrog.hpp): "predicted" kicks them like the
+// velocity, "staggered" advances them a whole step with the strain rate of
+// the half-step velocity before the forces (the central-difference scheme).
+enum class StressUpdate : int { Predicted = 0, Staggered = 1 };
 enum class EosType : int { IdealGas = 0, Murnaghan = 1, Tillotson = 2 };
 
 struct SimulationConfig {
@@ -41,6 +46,8 @@ struct SimulationConfig {
   // Solids: kernel-gradient correction of the velocity gradient
   // (Randles & Libersky 1996); off by default.
   bool kernel_correction = false;
+  // Solids with leapfrog: how S and rho are advanced (StressUpdate above).
+  StressUpdate stress_update = StressUpdate::Predicted;
   // XSPH (Monaghan 1989): particles drift with v + eps * (smoothed v_b - v_a);
   // eps in [0, 1], 0 = off (physics/xsph.hpp).
   double xsph = 0;
