@@ -376,18 +376,33 @@ TEST(SolidRun, ElasticEnergyBudgetHoldsWithAndWithoutKernelCorrection) {
 // of each mode's share (~1e-2 for the fastest modes, omega dt ~ 0.3 with
 // the correction's gain, which hold a small part of the energy; measured
 // 2e-4 overall), so it must stay within 1e-3 and must not grow.
-TEST(SolidRun, StaggeredStressUpdateKeepsAnInviscidSolidStable) {
+namespace {
+
+// Two halves of a 1 x 0.4 block of a dimensionless solid (K = 1, mu = 0.5,
+// rho0 = 1, kernel correction), the left one moving at +speed along x, the
+// right one at -speed, run with the given stress update; `extra` adds keys
+// to the material.
+Scene half_blocks(const std::string& update, const std::string& extra, double spacing, double speed,
+                  double end_time, const std::string& output) {
   std::ostringstream scene;
-  scene << "[simulation]\ndimension = 2\nend_time = 50.0\nintegrator = \"leapfrog\"\nkernel_correction = true\n"
+  scene << "[simulation]\ndimension = 2\nend_time = " << end_time
+        << "\nintegrator = \"leapfrog\"\nkernel_correction = true\nstress_update = \"" << update << "\"\n"
         << "[materials.rock]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n"
-        << "shear_modulus = 0.5\nviscosity = { alpha = 0.0, beta = 0.0 }\n";
+        << "shear_modulus = 0.5\n" << extra << "\n";
   for (int half = 0; half < 2; ++half)
     scene << "[[bodies]]\nshape = \"box\"\nmaterial = \"rock\"\nmin = [" << 0.5 * half << ", 0.0]\nmax = ["
-          << 0.5 * (half + 1) << ", 0.4]\nspacing = 0.05\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = ["
-          << (half ? 0.001 : -0.001) << ", 0.0]\n";
-  scene << "[output]\ninterval = 25.0\nconserved_interval = 1.0\n";
+          << 0.5 * (half + 1) << ", 0.4]\nspacing = " << spacing << "\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = ["
+          << (half ? -speed : speed) << ", 0.0]\n";
+  scene << "[output]\n" << output << "\n";
+  return parse_scene(scene.str(), "t.toml");
+}
+
+}  // namespace
+
+TEST(SolidRun, StaggeredStressUpdateKeepsAnInviscidSolidStable) {
   auto energy_change = [&](const std::string& update, double& at_half) {
-    const Scene s = parse_scene(scene.str(), "t.toml", {"simulation.stress_update=\"" + update + "\""});
+    const Scene s = half_blocks(update, "viscosity = { alpha = 0.0, beta = 0.0 }", 0.05, -0.001, 50.0,
+                                "interval = 25.0\nconserved_interval = 1.0");
     const auto dir = run_in_temp_dir(s, "inviscid_" + update);
     std::ifstream csv(dir / "conserved.csv");
     std::string line;
@@ -425,17 +440,9 @@ TEST(SolidRun, StaggeredStressUpdateKeepsAnInviscidSolidStable) {
 // by O((omega dt)^2) ~ 1e-2 (measured 4.5e-5); a lost accumulation would
 // give zero.
 TEST(SolidRun, StaggeredStressUpdateAccumulatesPlasticStrain) {
-  std::ostringstream scene;
-  scene << "[simulation]\ndimension = 2\nend_time = 0.5\nintegrator = \"leapfrog\"\nkernel_correction = true\n"
-        << "[materials.rock]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }\n"
-        << "shear_modulus = 0.5\nplasticity = { model = \"von_mises\", yield_stress = 0.01 }\n";
-  for (int half = 0; half < 2; ++half)
-    scene << "[[bodies]]\nshape = \"box\"\nmaterial = \"rock\"\nmin = [" << 0.5 * half << ", 0.0]\nmax = ["
-          << 0.5 * (half + 1) << ", 0.4]\nspacing = 0.025\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = ["
-          << (half ? -0.05 : 0.05) << ", 0.0]\n";
-  scene << "[output]\ninterval = 0.5\n";
   auto mean_plastic_strain = [&](const std::string& update) {
-    const Scene s = parse_scene(scene.str(), "t.toml", {"simulation.stress_update=\"" + update + "\""});
+    const Scene s = half_blocks(update, "plasticity = { model = \"von_mises\", yield_stress = 0.01 }", 0.025, 0.05,
+                                0.5, "interval = 0.5");
     const auto dir = run_in_temp_dir(s, "plastic_" + update);
     ParticleStore<2> ps;
     SnapshotMeta meta;
