@@ -572,11 +572,17 @@ RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_
 // pass 2 takes it); the step's work is that of the mean stress, so
 //   du = -(1/2) (sigma_{n+1} - sigma_n) : (sum_b m_b v_ba (x) g_a) / rho_{n+1}^2
 // is added to du/dt after pass 2 (staggered_energy_particle) and leapfrog
-// advances u by dt du/dt. Without it u gains ~(omega dt)/2 of the elastic
-// energy per radian of a mode of frequency omega (measured: a free elastic
-// block without viscosity at omega dt ~ 0.02 gained 7 times its energy in
-// u over ~30 periods). With it, E_kin + sum m u is conserved up to the
-// bounded term (dt^2/8) sum m |a|^2 of a symplectic step.
+// advances u by dt du/dt: with the kicks' force work this closes the
+// elastic energy exactly, up to the bounded term (dt^2/8) sum m |a|^2 of a
+// symplectic step. Without it u gains ~(omega dt)/2 of the elastic energy
+// per radian of a mode of frequency omega (measured: a free elastic block
+// without viscosity at omega dt ~ 0.02 gained 7 times its energy in u over
+// ~30 periods). Kicking u in two halves instead leaves an end term of
+// (dt/2) times the elastic power, ~(omega dt)/2 of the energy (measured
+// 7e-3 on that block). The viscous heating is booked at v_{1/2} while the
+// kicks apply the viscous forces of v_{n-1/2} and v_{n+1/2}: a mismatch of
+// O(gamma dt) of the heat, gamma the damping rate of the viscosity
+// (docs/physics.md, "Stress update").
 template <int D>
 RUBBLE_HD_INLINE void staggered_update_particle(const RhsContext<D>& c, std::uint32_t a, bool plasticity) {
   const StoreView<D>& s = c.s;
