@@ -1365,8 +1365,10 @@ Scene SceneReader::read(const toml::table& root) {
   }
 
   // The staggered stress update is a leapfrog scheme for solids; porous and
-  // damaged materials and extrapolated walls are not staggered yet (their
-  // states are set from the stress during pass 1, leapfrog.hpp).
+  // damaged materials and extrapolated walls are not staggered yet (alpha
+  // and D follow from the stress and density that the update advances,
+  // and a wall takes its state from the free particles before pass 1;
+  // leapfrog.hpp).
   if (scene.simulation.stress_update == StressUpdate::Staggered) {
     const std::string key = "simulation.stress_update";
     const toml::node* at = sim_table ? sim_table->get("stress_update") : nullptr;

@@ -69,7 +69,8 @@ RUBBLE_HD_INLINE Real integrated_alpha(Real alpha0, Real w, Real dalphadt) {
   return a > Real(1) ? a : Real(1);
 }
 
-// Second half: v, u (rho, S) from the half step with the new rates.
+// Second half: v, u (rho, S) from the half step with the new rates (u a
+// whole step from u_n under the staggered stress update).
 template <int D>
 RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>& half_state, std::size_t i, Real dt) {
   const Real half = Real(0.5) * dt;
