@@ -100,12 +100,12 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   // XSPH (when on) adds its correction, evaluated at the start of the step
   const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
   s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
-  if (half_state.staggered) {  // the evaluation sees v_{1/2}, and S, rho of the step's start
+  // the staggered update: the evaluation sees v_{1/2}, S and rho of the
+  // step's start, and u predicted a whole step (porous and damaged
+  // materials, whose alpha and D would be predicted here, are refused)
+  if (half_state.staggered) {
     s.v[i] = half_state.v[i];
     s.u[i] = half_state.u[i] + dt * s.dudt[i];
-    if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
-    if (half_state.damage_root)
-      s.damage_root[i] = integrated_damage_root(half_state.damage_root[i], half, s.ddamage_root_dt[i]);
     return;
   }
   leapfrog_kick<D>(s, half_state, i, dt);  // predicted end-of-step values
