@@ -70,6 +70,7 @@ DamageParams damage_params_from_config(const DamageConfig& c) {
   d.weibull_m = Real(c.weibull_m);
   d.crack_speed = Real(c.crack_speed);
   d.deviatoric = c.deviatoric;
+  d.capped = c.capped;
   return d;
 }
 

@@ -166,7 +166,8 @@ void draw_body_flaws(const Scene& scene, const std::vector<std::int64_t>& first,
     const std::size_t i0 = std::size_t(first[k]), n = std::size_t(first[k + 1] - first[k]);
     double volume = 0;
     for (std::size_t i = i0; i < i0 + n; ++i) volume += double(ps.m[i]) / double(ps.rho[i]);
-    const FlawSet f = draw_weibull_flaws(n, dc.weibull_k, dc.weibull_m, volume, std::uint64_t(dc.seed), k);
+    const FlawSet f = draw_weibull_flaws(n, dc.weibull_k, dc.weibull_m, volume, std::uint64_t(dc.seed), k,
+                                           dc.min_flaws_per_particle);
     for (std::size_t j = 0; j < n; ++j) {
       ps.flaw_count[i0 + j] = f.count[j];
       ps.flaw_eps_min[i0 + j] = Real(f.eps_min[j]);

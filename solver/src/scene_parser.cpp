@@ -831,14 +831,16 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
     fail(qp, "plasticity acts on solids only; give the material a shear_modulus > 0 (a fluid has no deviatoric stress)");
 }
 
-// damage = { model = "grady_kipp", weibull_k, weibull_m, crack_speed, deviatoric, seed }
+// damage = { model = "grady_kipp", weibull_k, weibull_m, crack_speed, deviatoric, seed,
+//            min_flaws_per_particle, cap }
 // (issue #18; Benz & Asphaug 1994, 1995; docs/scene.md).
 void SceneReader::read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m) {
   DamageConfig& c = m.damage;
   const auto model = string(q, "model", qp);
   if (!model) fail(sub(qp, "model"), "missing required key (the damage model; \"grady_kipp\")");
   choice(q, "model", qp, 0, {{"grady_kipp", 0}});
-  check_keys(q, qp, {"model", "weibull_k", "weibull_m", "crack_speed", "deviatoric", "seed"});
+  check_keys(q, qp,
+             {"model", "weibull_k", "weibull_m", "crack_speed", "deviatoric", "seed", "min_flaws_per_particle", "cap"});
   c.enabled = true;
   c.weibull_k = required_number(q, "weibull_k", qp, "the Weibull coefficient k [m^-3] of n(eps) = k eps^m");
   require(c.weibull_k > 0, q, "weibull_k", qp, c.weibull_k, "> 0 [m^-3]");
@@ -854,6 +856,17 @@ void SceneReader::read_damage(const toml::table& q, const std::string& qp, Mater
     if (*n < 0) fail(sub(qp, "seed"), "is " + std::to_string(*n) + ", must be >= 0", q.get("seed"));
     c.seed = *n;
   }
+  if (auto n = integer(q, "min_flaws_per_particle", qp)) {
+    // The draw costs about N (M + ln N) random numbers for N particles.
+    constexpr std::int64_t kMaxFlawsPerParticle = 1000000;
+    if (*n < 1 || *n > kMaxFlawsPerParticle)
+      fail(sub(qp, "min_flaws_per_particle"),
+           "is " + std::to_string(*n) + ", must be in [1, " + std::to_string(kMaxFlawsPerParticle) +
+               "] (the flaw draw costs about N times this many random numbers)",
+           q.get("min_flaws_per_particle"));
+    c.min_flaws_per_particle = std::int32_t(*n);
+  }
+  c.capped = choice(q, "cap", qp, true, {{"active_fraction", true}, {"none", false}});
   if (!(m.shear_modulus > 0))
     fail(qp, "damage acts on solids only; give the material a shear_modulus > 0 (a fluid carries no tension to break)");
 }

@@ -160,6 +160,35 @@ TEST(WeibullFlaws, NumberDrawnIsTheCouponCollectorCount) {
   }
 }
 
+TEST(WeibullFlaws, AMinimumPerParticleDrawsFurtherUpTheSamePopulation) {
+  // min_flaws_per_particle = M: the draw goes on until every particle holds
+  // M flaws. Each particle's count is then >= M; the first flaws drawn are
+  // those of the default draw (the same sequence, further continued), so the
+  // weakest flaw of the body is unchanged; the total T is above N M, and
+  // below N lambda where each particle's count (~ Poisson(lambda) after
+  // N lambda draws) falls short of M with probability at most
+  // exp(-(lambda - M)^2/(2 lambda)) (the Poisson lower-tail Chernoff bound),
+  // summed over the N particles 0.01: (lambda - M)^2 = 2 lambda ln(100 N).
+  // The largest threshold is that of flaw T.
+  const std::size_t N = 2000;
+  const FlawSet one = draw_weibull_flaws(N, 1e30, 9, 1.0, 5, 0), many = draw_weibull_flaws(N, 1e30, 9, 1.0, 5, 0, 50);
+  EXPECT_EQ(draw_weibull_flaws(N, 1e30, 9, 1.0, 5, 0, 1).count, one.count);  // 1 is the default
+  EXPECT_EQ(draw_weibull_flaws(N, 1e30, 9, 1.0, 5, 0, 0).count, one.count);  // below 1 counts as 1
+  for (std::size_t i = 0; i < N; ++i) {
+    ASSERT_GE(many.count[i], 50);
+    EXPECT_EQ(many.eps_min[i], one.eps_min[i]);  // the same first flaw per particle
+    EXPECT_GE(many.eps_max[i], one.eps_max[i]);
+  }
+  EXPECT_EQ(*std::min_element(many.eps_min.begin(), many.eps_min.end()), std::pow(1 / 1e30, 1.0 / 9));
+  EXPECT_EQ(std::accumulate(many.count.begin(), many.count.end(), std::int64_t(0)), many.total);
+  EXPECT_GT(double(many.total), 50.0 * double(N));
+  const double M = 50, b = std::log(100.0 * double(N));
+  const double lambda = M + b + std::sqrt(b * b + 2 * M * b);  // the root above M
+  EXPECT_LT(double(many.total), double(N) * lambda);
+  EXPECT_DOUBLE_EQ(*std::max_element(many.eps_max.begin(), many.eps_max.end()),
+                   std::pow(double(many.total) / 1e30, 1.0 / 9));
+}
+
 TEST(WeibullFlaws, ReproducibleAndSeeded) {
   const FlawSet a = draw_weibull_flaws(5000, 1e30, 9, 1.0, 42, 1), b = draw_weibull_flaws(5000, 1e30, 9, 1.0, 42, 1);
   EXPECT_EQ(a.count, b.count);
@@ -288,6 +317,51 @@ TEST(DamageGrowth, ConstantStrainRateCapAndNeverFalls) {
   EXPECT_EQ(st.active[0], 4);
 }
 
+TEST(DamageGrowth, WithoutTheCapAParticleBreaksOnItsFirstFlaws) {
+  // cap = "none": the same particle as above grows at n_act c_g / R_s past
+  // (n_act/n_f)^(1/3) up to 1, with only some of its flaws active; the cap
+  // functions give 1 once a flaw has been active (0 before).
+  const Real K = Real(2e10), mu = Real(1e10), rho0 = 2700;
+  MaterialParams mat = brittle(K, mu, rho0, 9);
+  mat.damage.capped = false;
+  OneParticle st;
+  RhsContext<3> c;
+  c.s = st.view();
+  c.mat = &mat;
+  st.m[0] = Real(2.7e-3);
+  st.rho[0] = rho0 * Real(1 - 3e-4);
+  const Real E = youngs_modulus(st.rho[0] * K / rho0, mu);
+  const Real eps = Real(6e6) / E;
+  st.flaws[0] = 4;
+  st.eps_min[0] = eps * Real(0.5);
+  st.eps_max[0] = eps * Real(2);
+  const Real n_act = active_flaws(eps, 4, st.eps_min[0], st.eps_max[0], 9);
+  ASSERT_LT(n_act, 4);
+  EXPECT_EQ(damage_root_cap<3>(0, 4, false), 0);
+  EXPECT_EQ(damage_root_cap<3>(n_act, 4, false), 1);
+  EXPECT_LT(damage_root_cap<3>(n_act, 4, true), 1);
+  eos_particle<3>(c, 0);
+  const Real rate = damage_rate_particle<3>(c, 0);
+  ASSERT_GT(rate, 0);
+  Real t = 0;
+  int steps = 0;
+  while (st.damage_root[0] < 1 && steps < 1000) {
+    const Real r = damage_rate_particle<3>(c, 0);
+    EXPECT_EQ(r, rate);  // constant up to 1: no cap
+    const Real dt = damage_dt_limit(r, kDamageStepChange);
+    st.damage_root[0] = integrated_damage_root(st.damage_root[0], dt, r);
+    damage_end_step_particle<3>(c, 0);
+    t += dt;
+    ++steps;
+  }
+  EXPECT_EQ(st.damage_root[0], 1);
+  // broken after 1/rate = R_s/(n_act c_g), to within the last step (which
+  // the clamp at 1 ends early)
+  EXPECT_NEAR(t, 1 / rate, kDamageStepChange / rate * (1 + 1e-9));
+  EXPECT_NEAR(st.active[0], n_act, 1e-12);  // with only n_act < n_f flaws active
+  EXPECT_EQ(damage_rate_particle<3>(c, 0), 0);  // at 1: no growth
+}
+
 TEST(DamagedStress, FullyDamagedParticlesTransmitNoTension) {
   // Two 2-D particles of a damaged material at rest (no viscosity): the
   // pair force of solid_pair from the acting stress (eos_particle,
@@ -382,13 +456,22 @@ TEST(DamageScene, KeysDefaultsAndErrors) {
   EXPECT_EQ(d.crack_speed, 0.4);  // Benz & Asphaug 1994
   EXPECT_TRUE(d.deviatoric);
   EXPECT_EQ(d.seed, 1);
+  EXPECT_EQ(d.min_flaws_per_particle, 1);  // Benz & Asphaug 1995: every particle at least one
+  EXPECT_TRUE(d.capped);                   // Benz & Asphaug 1995: D <= n_act/n_f
   const Scene t = parse_scene(
       stretched_block("damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, crack_speed = 0.3, "
-                      "deviatoric = false, seed = 99 }"),
+                      "deviatoric = false, seed = 99, min_flaws_per_particle = 40, cap = \"none\" }"),
       "t.toml");
   EXPECT_EQ(t.materials[0].damage.crack_speed, 0.3);
   EXPECT_FALSE(t.materials[0].damage.deviatoric);
   EXPECT_EQ(t.materials[0].damage.seed, 99);
+  EXPECT_EQ(t.materials[0].damage.min_flaws_per_particle, 40);
+  EXPECT_FALSE(t.materials[0].damage.capped);
+  EXPECT_TRUE(parse_scene(stretched_block("damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, "
+                                          "cap = \"active_fraction\" }"),
+                          "t.toml")
+                  .materials[0]
+                  .damage.capped);
   // each bad value: the file and the key in the message
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 0.0 }", "materials.rock.damage.weibull_m"},
@@ -403,6 +486,14 @@ TEST(DamageScene, KeysDefaultsAndErrors) {
       {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, seed = -1 }",
        "materials.rock.damage.seed"},
       {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, flaws = 3 }", "materials.rock.damage"},
+      {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, min_flaws_per_particle = 0 }",
+       "materials.rock.damage.min_flaws_per_particle"},
+      {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, min_flaws_per_particle = 2000000 }",
+       "materials.rock.damage.min_flaws_per_particle"},
+      {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, cap = \"fraction\" }",
+       "materials.rock.damage.cap"},
+      {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, cap = false }",
+       "materials.rock.damage.cap"},
   };
   for (const auto& [table, key] : bad) {
     const std::string msg = parse_error(stretched_block(table));

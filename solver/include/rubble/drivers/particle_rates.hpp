@@ -365,12 +365,13 @@ RUBBLE_HD_INLINE Real damage_rate_particle(const RhsContext<D>& c, std::uint32_t
   const StoreView<D>& s = c.s;
   if (!c.mat[s.material_id[a]].damage.enabled || !state_evolves<D>(s, a) || s.flaw_count[a] <= 0) return 0;
   const DamageDrive d = damage_drive_particle<D>(c, a);
-  return damage_root_rate<D>(s.damage_root[a], d.n_act, s.flaws_active[a], s.flaw_count[a], d.c_g, d.radius);
+  return damage_root_rate<D>(s.damage_root[a], d.n_act, s.flaws_active[a], s.flaw_count[a], d.c_g, d.radius,
+                             c.mat[s.material_id[a]].damage.capped);
 }
 
 // End of an accepted step: the flaws active at the final state join the
 // particle's record (n_active never falls), and delta is held to its cap
-// (n_active/n_flaws)^(1/d) — the growth of the step's last stage may have
+// (n_active/n_flaws)^(1/d) when the material is capped — the growth of the step's last stage may have
 // passed it — but never below its value at the start of the step, which
 // the record's cap already admitted (delta never falls).
 template <int D>
@@ -380,7 +381,7 @@ RUBBLE_HD_INLINE void damage_end_step_particle(const RhsContext<D>& c, std::uint
   const DamageDrive d = damage_drive_particle<D>(c, a);
   const Real n_max = d.n_act > s.flaws_active[a] ? d.n_act : s.flaws_active[a];
   s.flaws_active[a] = n_max;
-  const Real cap = damage_root_cap<D>(n_max, s.flaw_count[a]);
+  const Real cap = damage_root_cap<D>(n_max, s.flaw_count[a], c.mat[s.material_id[a]].damage.capped);
   if (s.damage_root[a] > cap) s.damage_root[a] = cap;
 }
 

@@ -33,8 +33,28 @@
 // disc in 2-D, half the length in 1-D: particle_radius). The evolved field is
 // delta = D^(1/d) ("damage_root").
 // It grows only while the local tensile strain exceeds the particle's
-// weakest flaw (n_act > 0); a particle's damage cannot exceed the fraction of
-// its flaws ever activated, D <= n_act,max / n_f (BA95), and never decreases.
+// weakest flaw (n_act > 0) and never decreases. By default (BA95) a
+// particle's damage cannot exceed the fraction of its flaws ever activated,
+// D <= n_act,max / n_f; DamageParams::capped = false drops that cap (D <= 1
+// only).
+//
+// What the cap does to the strain-rate law (docs/physics.md, "Fracture"; the
+// rung verification/fracture_strain_rate). Without the cap, under a strain
+// growing as eps_dot t, in 1-D (V_p = 2 R_s, n_act = k V_p eps^m on average)
+//   delta(t) = 2 k c_g eps_dot^m t^(m+1) / (m+1),
+// Grady & Kipp's law: the failure strain grows as eps_dot^(1/(m+1)), set by
+// the material (k, m, c_g) and not by the particles. With the cap the
+// particle's D is also held below n_act/n_f = (eps/eps_max)^m (its flaws
+// spread uniformly in eps^m up to its largest, eps_max); the ratio of the
+// free growth to the cap is n_f c_g t / ((m+1) R_s) = (eps_max/eps_GK)^m at
+// the Grady-Kipp failure time. So whenever the particle still has flaws to
+// activate at the Grady-Kipp failure strain (eps_max > eps_GK) the cap binds
+// and the particle breaks only near its own eps_max, whatever the rate; when
+// it has none left (eps_max < eps_GK) growth runs at the saturated
+// n_f c_g / R_s and the failure stress rises ~linearly with the rate. The
+// Grady-Kipp regime is squeezed to the single rate where eps_max = eps_GK,
+// and eps_max is a property of the draw (about (N ln N/(k V))^(1/m)), not
+// of the material.
 //
 // Local strain (BA94): eps = sigma_t / E with sigma_t the largest principal
 // stress of the undamaged stress sigma = -p I + S and E = 9 K mu/(3 K + mu)
@@ -65,6 +85,7 @@ struct DamageParams {
   Real weibull_m = 0;       // m [1]
   Real crack_speed = 0.4;   // c_g / c_l
   bool deviatoric = true;   // damage also reduces the deviatoric stress
+  bool capped = true;       // D <= n_act,max / n_f (BA95); false: D <= 1 only
 };
 
 // Largest change of delta = D^(1/d) in one step (dt_limit_particle): a
@@ -141,24 +162,26 @@ RUBBLE_HD_INLINE Real active_flaws(Real eps, int n_f, Real eps_min, Real eps_max
   return n < Real(n_f) ? n : Real(n_f);
 }
 
-// The cap on delta: D <= n_act,max / n_f, i.e. delta <= (n_act,max/n_f)^(1/d).
+// The cap on delta: D <= n_act,max / n_f, i.e. delta <= (n_act,max/n_f)^(1/d)
+// (capped, BA95), or 1 once a flaw has been active (not capped).
 template <int D>
-RUBBLE_HD_INLINE Real damage_root_cap(Real n_active_max, int n_f) {
+RUBBLE_HD_INLINE Real damage_root_cap(Real n_active_max, int n_f, bool capped = true) {
   if (n_f <= 0 || n_active_max <= Real(0)) return 0;
+  if (!capped) return 1;
   const Real frac = n_active_max >= Real(n_f) ? Real(1) : n_active_max / Real(n_f);
   return damage_root_from<D>(frac);
 }
 
 // d delta/dt = n_act c_g / R_s while the particle is in tension beyond its
-// weakest flaw and below its cap; 0 otherwise. n_act is the count at the
-// current strain, n_active_max the most ever activated (>= n_act after the
-// caller's max).
+// weakest flaw and below its cap (damage_root_cap); 0 otherwise. n_act is
+// the count at the current strain, n_active_max the most ever activated
+// (>= n_act after the caller's max).
 template <int D>
 RUBBLE_HD_INLINE Real damage_root_rate(Real delta, Real n_act, Real n_active_max, int n_f, Real crack_speed,
-                                       Real radius) {
+                                       Real radius, bool capped = true) {
   if (n_act <= Real(0) || radius <= Real(0)) return 0;
   const Real nmax = n_active_max > n_act ? n_active_max : n_act;
-  if (delta >= damage_root_cap<D>(nmax, n_f)) return 0;
+  if (delta >= damage_root_cap<D>(nmax, n_f, capped)) return 0;
   return n_act * crack_speed / radius;
 }
 

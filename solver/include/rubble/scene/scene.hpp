@@ -158,6 +158,8 @@ struct DamageConfig {
   double crack_speed = 0.4; // crack growth speed / longitudinal sound speed, in (0, 1]
   bool deviatoric = true;   // damage reduces the deviatoric stress too (not only tension)
   std::int64_t seed = 1;    // of the flaw draw (>= 0); each body mixes in its index
+  std::int32_t min_flaws_per_particle = 1;  // the draw goes on until every particle has this many
+  bool capped = true;       // cap = "active_fraction": D <= n_act,max/n_f (BA95); "none": D <= 1
 };
 
 struct MaterialConfig {
