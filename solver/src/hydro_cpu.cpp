@@ -80,6 +80,9 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     MaterialParams p{};
     p.eos = eos_params_from_material(m);  // EOS and its add-on options (issue #3)
     p.av = {Real(m.viscosity.alpha), Real(m.viscosity.beta)};
+    p.av_switch.enabled = m.viscosity.switch_on;
+    p.av_switch.alpha_min = Real(m.viscosity.alpha_min);
+    p.av_switch.decay = Real(m.viscosity.decay);
     p.alpha_u = m.conductivity.enabled ? Real(m.conductivity.alpha_u) : Real(0);
     p.shear_modulus = Real(m.shear_modulus);
     const bool as = m.artificial_stress.enabled && m.shear_modulus > 0;
@@ -128,6 +131,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   porosity_ = f.porosity;
   plasticity_ = f.plasticity;
   damage_ = f.damage;
+  viscosity_switch_ = f.viscosity_switch;
   body_force_ = f.body_force;
   wall_extrapolation_ = f.wall_extrapolation;
   for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
@@ -316,14 +320,15 @@ void HydroCpu<D>::equation_of_state() {
 // two threads write one particle, and the results differ from the gather
 // loop (hydro_rates_particle, which the CUDA backend runs) only in the
 // order of each particle's sum. Scenes with free-slip walls (the velocity a
-// particle sees of a wall particle depends on who looks) and porous scenes
-// (dalpha/dt needs the complete sums) keep the gather loop.
+// particle sees of a wall particle depends on who looks), porous scenes
+// (dalpha/dt needs the complete sums) and the viscosity switch (a
+// particle's d alpha_AV/dt likewise) keep the gather loop.
 template <int D>
 void HydroCpu<D>::rates() {
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
   const StoreView<D>& s = c.s;
-  if (s.wall_normal || s.dalphadt) {
+  if (s.wall_normal || s.dalphadt || s.dav_alpha_dt) {
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::size_t a = 0; a < n; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
@@ -580,7 +585,7 @@ void HydroCpu<D>::body_force() {
 
 template <int D>
 void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
-  if (!(porosity_ || plasticity_ || damage_ || shifting_ > Real(0))) return;
+  if (!(porosity_ || plasticity_ || damage_ || viscosity_switch_ || shifting_ > Real(0))) return;
   const ScopedSeconds timer(phases_.end_step);
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
@@ -591,6 +596,10 @@ void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
   if (damage_) {
 #pragma omp parallel for if (n > 4096)
     for (std::size_t a = 0; a < n; ++a) damage_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
+  }
+  if (viscosity_switch_) {
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) viscosity_switch_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
   }
   if (plasticity_ || porosity_ || damage_) {
     // The pressure of the final state: the plastic return works at fixed p,

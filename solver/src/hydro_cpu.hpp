@@ -135,6 +135,7 @@ class HydroCpu {
   Real shifting_ = 0;       // particle shifting coefficient A (0 = off)
   std::vector<Vec<D>> shift_;  // particle shifting: this step's shifts (scratch)
   bool porosity_ = false, plasticity_ = false, damage_ = false, body_force_ = false, wall_extrapolation_ = false;
+  bool viscosity_switch_ = false;  // a material has the viscosity switch (end-of-step bounds)
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;
   RhsPhaseSeconds phases_;

@@ -176,6 +176,13 @@ void draw_body_flaws(const Scene& scene, const std::vector<std::int64_t>& first,
   }
 }
 
+// The viscosity switch starts at its floor (a body at rest or in uniform
+// motion has no shock to damp); other materials' particles hold their
+// constant alpha in av_alpha (unused).
+static Real initial_viscosity_alpha(const MaterialParams& mp) {
+  return mp.av_switch.enabled ? mp.av_switch.alpha_min : mp.av.alpha;
+}
+
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
                                           ParticleStore<D>& ps) {
@@ -228,6 +235,7 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
         ps.rho[next] = Real(rho);
         ps.u[next] = Real(u);
         ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(std::max(rho, 0.05 * model.rho_c)));
+        if (!ps.av_alpha.empty()) ps.av_alpha[next] = initial_viscosity_alpha(materials[b.material_id]);
         ++next;
       }
       continue;
@@ -261,6 +269,7 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
       ps.u[next] = Real(u);
       ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));
       if (!ps.alpha.empty()) ps.alpha[next] = Real(alpha0);
+      if (!ps.av_alpha.empty()) ps.av_alpha[next] = initial_viscosity_alpha(materials[b.material_id]);
       if (!ps.wall_normal.empty() && b.wall_free_slip)
         for (int k = 0; k < D; ++k) ps.wall_normal[next][k] = Real(b.wall_normal[k]);
       if (!ps.boundary.empty())
@@ -463,6 +472,7 @@ FieldNeeds field_needs(const Scene& scene) {
     // opening persists (and so does dilatant flow, psi > 0)
     needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
     needs.damage = needs.damage || m.damage.enabled;
+    needs.viscosity_switch = needs.viscosity_switch || m.viscosity.switch_on;
   }
   return needs;
 }

@@ -691,7 +691,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
 
   if (const toml::table* v = table(t, "viscosity", p)) {
     const std::string vp = sub(p, "viscosity");
-    check_keys(*v, vp, {"alpha", "beta"});
+    check_keys(*v, vp, {"alpha", "beta", "switch", "alpha_min", "decay"});
     if (auto x = number(*v, "alpha", vp)) {
       require(*x >= 0, *v, "alpha", vp, *x, ">= 0");
       m.viscosity.alpha = *x;
@@ -700,6 +700,24 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
       require(*x >= 0, *v, "beta", vp, *x, ">= 0");
       m.viscosity.beta = *x;
     }
+    m.viscosity.switch_on = choice(*v, "switch", vp, false, {{"none", false}, {"morris_monaghan", true}});
+    if (auto x = number(*v, "alpha_min", vp)) {
+      if (!m.viscosity.switch_on)
+        fail(sub(vp, "alpha_min"), "applies only with switch = \"morris_monaghan\"", v->get("alpha_min"));
+      require(*x >= 0, *v, "alpha_min", vp, *x, ">= 0");
+      m.viscosity.alpha_min = *x;
+    }
+    if (auto x = number(*v, "decay", vp)) {
+      if (!m.viscosity.switch_on)
+        fail(sub(vp, "decay"), "applies only with switch = \"morris_monaghan\"", v->get("decay"));
+      require(*x > 0 && *x <= 1, *v, "decay", vp, *x, "in (0, 1] (tau = h/(decay c); 0.1 in Price's codes)");
+      m.viscosity.decay = *x;
+    }
+    if (m.viscosity.switch_on && !(m.viscosity.alpha > m.viscosity.alpha_min))
+      fail(sub(vp, "alpha"),
+           "is " + std::to_string(m.viscosity.alpha) + " with the switch; it is alpha_max and must exceed alpha_min (" +
+               std::to_string(m.viscosity.alpha_min) + ")",
+           v->get("alpha"));
   }
   if (const toml::table* c = table(t, "conductivity", p)) {
     const std::string cp = sub(p, "conductivity");
@@ -1376,6 +1394,17 @@ Scene SceneReader::read(const toml::table& root) {
            sim_table->get("density"));
     scene.simulation.density = DensityForm::Continuity;
   }
+
+  // The viscosity switch is evolved by the hydro force loop only; a scene
+  // with a solid runs the solid passes, which take the material's constant
+  // coefficients.
+  const auto solid_in_scene = std::find_if(scene.materials.begin(), scene.materials.end(),
+                                           [](const MaterialConfig& m) { return m.shear_modulus > 0; });
+  for (const MaterialConfig& m : scene.materials)
+    if (m.viscosity.switch_on && solid_in_scene != scene.materials.end())
+      fail("materials." + m.name + ".viscosity.switch",
+           "the viscosity switch is not supported yet in a scene with a solid (material '" + solid_in_scene->name +
+               "' has shear_modulus > 0); use constant coefficients");
 
   // The staggered stress update is a leapfrog scheme for solids; porous and
   // damaged materials and extrapolated walls are not staggered yet (alpha

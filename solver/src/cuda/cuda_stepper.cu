@@ -731,6 +731,7 @@ struct CudaStepper<D>::Impl {
   Real hfact, courant, force_factor, h_tolerance, xsph_epsilon, shifting;
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
   bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
+  bool viscosity_switch = false;  // a material has the viscosity switch (end-of-step bounds)
   bool staggered = false;  // solids: simulation.stress_update = "staggered" (leapfrog.hpp)
   Real stagger_dt = 0;     // inside a staggered evaluation: its dt
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
@@ -750,7 +751,7 @@ struct CudaStepper<D>::Impl {
   Extent<D> grid_extent{};  // the positions' extent when the grid was built (Barnes-Hut reuses it)
   // integrator scratch
   DeviceArray<Vec<D>> v_half, shift;  // shift: particle shifting
-  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start, damage_half;
+  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start, damage_half, av_half;
   DeviceArray<Mat<D>> S_half;
   DeviceStore<D> y0, y1;
   DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
@@ -796,6 +797,7 @@ struct CudaStepper<D>::Impl {
     porosity = f.porosity;
     plasticity = f.plasticity;
     damage = f.damage;
+    viscosity_switch = f.viscosity_switch;
     wall_extrapolation = f.wall_extrapolation;
     body_force = f.body_force;
     staggered = scene.simulation.stress_update == StressUpdate::Staggered && solid;
@@ -1088,6 +1090,10 @@ struct CudaStepper<D>::Impl {
     if (damage)
       for_each_index("end-of-step damage cap", n(),
                      [=] __device__(std::size_t i) { damage_end_step_particle<D>(c, std::uint32_t(i)); });
+    if (viscosity_switch)
+      for_each_index("end-of-step viscosity switch bounds", n(), [=] __device__(std::size_t i) {
+        viscosity_switch_end_step_particle<D>(c, std::uint32_t(i));
+      });
     if (plasticity || porosity || damage)
       for_each_index("end-of-step equation of state", n(),
                      [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
@@ -1148,12 +1154,14 @@ struct CudaStepper<D>::Impl {
       RUBBLE_CUDA(cudaMemcpy(alpha_start.data(), s.alpha, count * sizeof(Real), cudaMemcpyDeviceToDevice));
     }
     if (s.ddamage_root_dt) damage_half.resize(count);
+    if (s.dav_alpha_dt) av_half.resize(count);
     const LeapfrogHalf<D> half{v_half.data(),
                                u_half.data(),
                                s.drhodt && !staggered ? rho_half.data() : nullptr,
                                s.dSdt && !staggered ? S_half.data() : nullptr,
                                s.dalphadt ? alpha_half.data() : nullptr,
                                s.ddamage_root_dt ? damage_half.data() : nullptr,
+                               s.dav_alpha_dt ? av_half.data() : nullptr,
                                staggered};
     const Box<D> dom = domain;
     for_each_index("leapfrog kick-drift", count,

@@ -9,6 +9,7 @@
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/plasticity.hpp"
 #include "rubble/physics/porosity.hpp"
+#include "rubble/physics/viscosity_switch.hpp"
 
 namespace rubble {
 
@@ -16,7 +17,8 @@ struct Scene;
 
 struct MaterialParams {
   EosParams eos;
-  ViscosityParams av;
+  ViscosityParams av;   // constant coefficients, or alpha_max and beta with the switch
+  ViscositySwitchParams av_switch;  // per-particle alpha (enabled = false: constant)
   Real alpha_u;        // artificial conductivity (0 = off)
   Real shear_modulus;  // mu (0 = no strength)
   Real as_epsilon;     // artificial stress epsilon (0 = off)

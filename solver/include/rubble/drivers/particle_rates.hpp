@@ -398,8 +398,31 @@ template <int D>
 RUBBLE_HD_INLINE HydroParticle<D> hydro_particle(const RhsContext<D>& c, std::uint32_t i) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[i]];
+  const ViscosityParams av = mat.av_switch.enabled ? switched_viscosity(mat.av, s.av_alpha[i]) : mat.av;
   return HydroParticle<D>{s.x[i], s.v[i], s.m[i],  s.rho[i], s.p[i], s.u[i], s.h[i],
-                          c.summation ? s.omega[i] : Real(1), s.cs[i], mat.av, mat.alpha_u};
+                          c.summation ? s.omega[i] : Real(1), s.cs[i], av, mat.alpha_u};
+}
+
+// d alpha/dt of particle a's viscosity switch (physics/viscosity_switch.hpp)
+// from its continuity rate drho/dt = -rho div v (the force loop's sum);
+// 0 for materials without the switch and particles whose state does not
+// evolve (frozen walls keep their alpha).
+template <int D>
+RUBBLE_HD_INLINE Real viscosity_switch_rate_particle(const RhsContext<D>& c, std::uint32_t a, Real drhodt) {
+  const StoreView<D>& s = c.s;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  if (!mat.av_switch.enabled || !state_evolves<D>(s, a)) return 0;
+  const Real compression = s.rho[a] > Real(0) ? drhodt / s.rho[a] : Real(0);  // -div v
+  const Real hM = monaghan_h<D>(c.kernel, s.h[a]);
+  return viscosity_switch_rate(s.av_alpha[a], compression, hM, s.cs[a], mat.av.alpha, mat.av_switch);
+}
+
+// End of an accepted step: the switch's alpha back within [alpha_min,
+// alpha_max] (an explicit step may overshoot a bound).
+template <int D>
+RUBBLE_HD_INLINE void viscosity_switch_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const MaterialParams& mat = c.mat[c.s.material_id[a]];
+  if (mat.av_switch.enabled) c.s.av_alpha[a] = viscosity_switch_bound(c.s.av_alpha[a], mat.av.alpha, mat.av_switch);
 }
 
 // Pressure, viscosity and conductivity: dv/dt, du/dt, (drho/dt), mu_max.
@@ -427,6 +450,7 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   s.dudt[a] = dudt;
   if (!c.summation) s.drhodt[a] = drhodt;
   if (s.dalphadt) s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
+  if (s.dav_alpha_dt) s.dav_alpha_dt[a] = viscosity_switch_rate_particle<D>(c, a, drhodt);
   s.mu_max[a] = mu_max;
 }
 

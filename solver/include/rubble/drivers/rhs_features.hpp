@@ -20,6 +20,7 @@ struct RhsFeatures {
   bool damage = false;             // a solid material has tensile damage: its growth rate, end-of-step cap
   bool body_force = false;         // simulation.gravity is not zero
   bool wall_extrapolation = false; // a boundary body has boundary_state = "extrapolated"
+  bool viscosity_switch = false;   // a material's viscosity alpha is per particle: its rate, end-of-step bounds
 };
 
 // Throws RunError when the store lacks a field the features need.
@@ -32,6 +33,7 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
     f.porosity = f.porosity || m.porosity.enabled;
     f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
     f.damage = f.damage || m.damage.enabled;
+    f.viscosity_switch = f.viscosity_switch || m.av_switch.enabled;
   }
   for (int k = 0; k < D; ++k) f.body_force = f.body_force || scene.simulation.gravity[k] != 0;
   for (const BodyConfig& b : scene.bodies)
@@ -39,6 +41,8 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
                            (b.boundary != BoundaryKind::None && b.boundary_state == BoundaryState::Extrapolated);
   if (f.porosity && (ps.alpha.size() != ps.n || ps.dalphadt.size() != ps.n))
     throw RunError("porous materials need the alpha and dalphadt fields allocated");
+  if (f.viscosity_switch && (ps.av_alpha.size() != ps.n || ps.dav_alpha_dt.size() != ps.n))
+    throw RunError("the viscosity switch needs the av_alpha and dav_alpha_dt fields allocated");
   if (f.plasticity && (!f.solid || ps.eps_p.size() != ps.n))
     throw RunError("plasticity needs a solid with the eps_p field allocated");
   if (f.damage && (!f.solid || ps.damage_root.size() != ps.n || ps.flaw_count.size() != ps.n))

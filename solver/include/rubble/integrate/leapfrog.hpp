@@ -33,7 +33,9 @@
 // The distention alpha of porous materials is evolved like u, and kept >= 1
 // (integrated_alpha); its rate is <= 0, so alpha never rises. The damage
 // root delta = D^(1/d) of damaged solids likewise, kept <= 1 with a rate >= 0
-// (integrated_damage_root), and held to its cap at the end of the step.
+// (integrated_damage_root), and held to its cap at the end of the step. The
+// viscosity switch's alpha likewise (kept >= 0, held to its bounds at the
+// end of the step).
 #include <cstddef>
 #include <stdexcept>
 #include <vector>
@@ -43,6 +45,7 @@
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/particles/store_view.hpp"
 #include "rubble/physics/damage.hpp"
+#include "rubble/physics/viscosity_switch.hpp"
 
 namespace rubble {
 
@@ -56,6 +59,7 @@ struct LeapfrogHalf {
   Mat<D>* S = nullptr;
   Real* alpha = nullptr;
   Real* damage_root = nullptr;
+  Real* av_alpha = nullptr;  // the viscosity switch's alpha
   // the staggered stress update: S and rho are not kicked (S, rho are
   // nullptr here); the evaluation sees v_{1/2} and advances them itself,
   // and u (u_n here) advances by dt du/dt at the end of the step
@@ -81,6 +85,7 @@ RUBBLE_HD_INLINE void leapfrog_kick(const StoreView<D>& s, const LeapfrogHalf<D>
   if (half_state.alpha) s.alpha[i] = integrated_alpha(half_state.alpha[i], half, s.dalphadt[i]);
   if (half_state.damage_root)
     s.damage_root[i] = integrated_damage_root(half_state.damage_root[i], half, s.ddamage_root_dt[i]);
+  if (half_state.av_alpha) s.av_alpha[i] = integrated_switch_alpha(half_state.av_alpha[i], half, s.dav_alpha_dt[i]);
 }
 
 // First half of particle i's step: kick to the half step, drift the
@@ -97,6 +102,7 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   if (half_state.alpha) half_state.alpha[i] = integrated_alpha(s.alpha[i], half, s.dalphadt[i]);
   if (half_state.damage_root)
     half_state.damage_root[i] = integrated_damage_root(s.damage_root[i], half, s.ddamage_root_dt[i]);
+  if (half_state.av_alpha) half_state.av_alpha[i] = integrated_switch_alpha(s.av_alpha[i], half, s.dav_alpha_dt[i]);
   // XSPH (when on) adds its correction, evaluated at the start of the step
   const Vec<D> xsph = s.xsph_v ? s.xsph_v[i] : Vec<D>::zero();
   s.x[i] = domain.wrap(s.x[i] + dt * (half_state.v[i] + xsph));
@@ -122,12 +128,14 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt, bool staggered = 
   std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
   const std::vector<Real> alpha_start = ps.alpha;               // and its value at the start (end_step)
   std::vector<Real> damage_half(ps.ddamage_root_dt.empty() ? 0 : n);  // damaged solids: delta = D^(1/d)
+  std::vector<Real> av_half(ps.dav_alpha_dt.empty() ? 0 : n);        // the viscosity switch's alpha
   const LeapfrogHalf<D> half{v_half.data(),
                              u_half.data(),
                              rho_half.empty() ? nullptr : rho_half.data(),
                              S_half.empty() ? nullptr : S_half.data(),
                              alpha_half.empty() ? nullptr : alpha_half.data(),
                              damage_half.empty() ? nullptr : damage_half.data(),
+                             av_half.empty() ? nullptr : av_half.data(),
                              staggered};
   const StoreView<D> s = ps.view();
   const Box<D> domain = sys.domain();

@@ -54,6 +54,7 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
     if (y.dSdt) y.S[i] = y0.S[i] + w * ka.dSdt[i];
     if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i]);
     if (y.ddamage_root_dt) y.damage_root[i] = integrated_damage_root(y0.damage_root[i], w, ka.ddamage_root_dt[i]);
+    if (y.dav_alpha_dt) y.av_alpha[i] = integrated_switch_alpha(y0.av_alpha[i], w, ka.dav_alpha_dt[i]);
     return;
   }
   y.x[i] = domain.wrap(y0.x[i] + w * (ka.position_rate(i) + kb->position_rate(i)));
@@ -64,6 +65,7 @@ RUBBLE_HD_INLINE void rk2_combine(const StoreView<D>& y, const StoreView<D>& y0,
   if (y.dalphadt) y.alpha[i] = integrated_alpha(y0.alpha[i], w, ka.dalphadt[i] + kb->dalphadt[i]);
   if (y.ddamage_root_dt)
     y.damage_root[i] = integrated_damage_root(y0.damage_root[i], w, ka.ddamage_root_dt[i] + kb->ddamage_root_dt[i]);
+  if (y.dav_alpha_dt) y.av_alpha[i] = integrated_switch_alpha(y0.av_alpha[i], w, ka.dav_alpha_dt[i] + kb->dav_alpha_dt[i]);
 }
 
 // The scaled error of particle i: y_heun - y_rk3 = c23 [ (k1 + k2)/2 - k3 ]

@@ -36,6 +36,7 @@ struct FieldNeeds {
   bool free_slip = false;           // a wall is free-slip: wall_normal is stored
   bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
   bool damage = false;              // a solid material has tensile damage: the damage and flaw fields are stored
+  bool viscosity_switch = false;    // a material has the viscosity switch: av_alpha and dav_alpha_dt are stored
 };
 
 template <int D>
@@ -115,6 +116,13 @@ struct ParticleStore {
   std::vector<Real> flaw_eps_max;         // [1]
   std::vector<Real> flaws_active;         // [1] (updated at the end of each step; never falls)
 
+  // the viscosity switch (allocated only when a material has one;
+  // physics/viscosity_switch.hpp): each particle's alpha of the artificial
+  // viscosity and its rate (particles of other materials keep their
+  // material's constant alpha here, unused)
+  std::vector<Real> av_alpha;      // [1] (evolved)
+  std::vector<Real> dav_alpha_dt;  // [1/s]
+
   // free-slip walls (allocated only when a boundary body is free-slip): the
   // wall's unit normal on its particles, zero on every other particle
   std::vector<Vec<D>> wall_normal;  // [1]
@@ -190,6 +198,8 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"flaw_eps_min", &PS::flaw_eps_min, "1", FieldRole::Constant, true},
       {"flaw_eps_max", &PS::flaw_eps_max, "1", FieldRole::Constant, true},
       {"flaws_active", &PS::flaws_active, "1", FieldRole::Evolved, true},
+      {"av_alpha", &PS::av_alpha, "1", FieldRole::Evolved, true},
+      {"dav_alpha_dt", &PS::dav_alpha_dt, "1/s", FieldRole::Rate, false},
   };
   return table;
 }
@@ -241,6 +251,10 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
     flaw_eps_min.assign(n, 0);
     flaw_eps_max.assign(n, 0);
     flaws_active.assign(n, 0);
+  }
+  if (needs.viscosity_switch) {
+    av_alpha.assign(n, 0);
+    dav_alpha_dt.assign(n, 0);
   }
 }
 

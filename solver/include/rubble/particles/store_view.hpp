@@ -62,6 +62,8 @@ struct StoreView {
   Real* flaw_eps_min = nullptr;
   Real* flaw_eps_max = nullptr;
   Real* flaws_active = nullptr;
+  Real* av_alpha = nullptr;
+  Real* dav_alpha_dt = nullptr;
 
   // Point the field called `name` (the field table's names) at `ptr`;
   // false if the name is unknown or the element type does not match.
@@ -86,6 +88,7 @@ struct StoreView {
     set(wall_normal, "wall_normal");
     set(damage_root, "damage_root"), set(ddamage_root_dt, "ddamage_root_dt"), set(flaw_count, "flaw_count");
     set(flaw_eps_min, "flaw_eps_min"), set(flaw_eps_max, "flaw_eps_max"), set(flaws_active, "flaws_active");
+    set(av_alpha, "av_alpha"), set(dav_alpha_dt, "dav_alpha_dt");
     return ok;
   }
 

@@ -61,8 +61,11 @@ struct SimulationConfig {
 };
 
 struct ArtificialViscosity {
-  double alpha = 1.0;  // Monaghan (1992) linear term
-  double beta = 2.0;   // quadratic term
+  double alpha = 1.0;  // Monaghan (1992) linear term (alpha_max with the switch)
+  double beta = 2.0;   // quadratic term (at alpha_max with the switch)
+  bool switch_on = false;  // switch = "morris_monaghan": per-particle alpha (physics/viscosity_switch.hpp)
+  double alpha_min = 0.1;  // the switch's floor
+  double decay = 0.1;      // the switch's decay constant l: tau = h/(l c)
 };
 
 struct ArtificialConductivity {
