@@ -126,6 +126,15 @@ using namespace rubble;
 
 namespace {
 
+// The rods' artificial viscosity, for the record.
+std::string viscosity_label(const rubble::ArtificialViscosity& v) {
+  std::ostringstream o;
+  o << "alpha " << v.alpha << ", beta " << v.beta;
+  if (v.switch_on) o << ", Morris-Monaghan switch (alpha_min " << v.alpha_min << ", decay " << v.decay << ")";
+  return o.str();
+}
+
+
 struct Args {
   std::string part, which_case, scene, records = "reports/records", label;
   std::vector<double> resolutions;
@@ -687,7 +696,9 @@ int run_piston(const Args& args) {
         {"parameters", Json::object({{"scene", args.scene.substr(args.scene.find_last_of('/') + 1)},
                                      {"drive_speed", kDrive}, {"t", t}, {"rod_length", kRod},
                                      {"integrator", scene.simulation.integrator == Integrator::Leapfrog ? "leapfrog" : "rk2_adaptive"},
-                                     {"wall", "mirror (two rods colliding at x = 0)"}})},
+                                     {"wall", "mirror (two rods colliding at x = 0)"},
+                                     {"viscosity", viscosity_label(scene.materials[0].viscosity)},
+                                     {"overrides", rubble::verification::joined(args.sets)}})},
         {"resolution", N},
         {"resolution_name", "N (particles per 20 mm rod)"},
         {"n_particles", fs.rho.size()},
