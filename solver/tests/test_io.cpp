@@ -79,6 +79,7 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.plasticity = true;  // eps_p (a snapshot field)
   needs.inelastic_volume = true;  // eps_v (a snapshot field)
   needs.damage = true;  // damage_root, the flaws and flaws_active (snapshot fields)
+  needs.viscosity_switch = true;  // av_alpha (a snapshot field) and dav_alpha_dt
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -102,6 +103,7 @@ ParticleStore<D> make_store(std::size_t n) {
     ps.flaw_eps_min[i] = Real(1e-4) / Real(1 + i);
     ps.flaw_eps_max[i] = Real(2e-4) / Real(1 + i);
     ps.flaws_active[i] = Real(i % 4);
+    ps.av_alpha[i] = Real(0.1) + Real(0.07) * Real(i);
   }
   return ps;
 }
@@ -264,6 +266,7 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.flaw_eps_min.clear();
   ps.flaw_eps_max.clear();
   ps.flaws_active.clear();
+  ps.av_alpha.clear();  // no viscosity switch
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;

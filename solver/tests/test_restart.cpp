@@ -2,8 +2,8 @@
 // checkpoint written when it was stopped, ends in exactly the state of the
 // uninterrupted run: every field of the final snapshot bit for bit, on the
 // CPU backend, for both integrators, for hydrodynamics, a solid with
-// artificial stress, plasticity with walls and shifting, and a
-// self-gravitating body. conserved.csv of the resumed run is the
+// artificial stress, plasticity with walls and shifting, damage, the
+// viscosity switch, and a self-gravitating body. conserved.csv of the resumed run is the
 // uninterrupted run's, line for line. Changed files on disk cannot change a
 // resumed run: the scene, its overrides and the library values travel in
 // the snapshot.
@@ -234,6 +234,14 @@ TEST(Restart, KernelCorrectionIsBitIdentical) {
 TEST(Restart, GranularWallsAndShiftingAreBitIdentical) { expect_restart_identical<2>(granular_scene(), "granular", 2); }
 TEST(Restart, DamageLeapfrogIsBitIdentical) { expect_restart_identical<2>(damage_scene("leapfrog"), "damage_lf", 2); }
 TEST(Restart, DamageRk2IsBitIdentical) { expect_restart_identical<2>(damage_scene("rk2_adaptive"), "damage_rk2", 2); }
+// The viscosity switch: each particle's alpha travels in the snapshots.
+TEST(Restart, ViscositySwitchIsBitIdentical) {
+  for (const char* integrator : {"leapfrog", "rk2_adaptive"}) {
+    std::string text = hydro_scene(integrator);
+    text.insert(text.find("conductivity ="), "viscosity = { switch = \"morris_monaghan\" }\n");
+    expect_restart_identical<2>(text, std::string("avsw_") + integrator, 2);
+  }
+}
 TEST(Restart, SelfGravityLeapfrogIsBitIdentical) { expect_restart_identical<3>(gravity_scene("leapfrog"), "grav_lf", 2); }
 TEST(Restart, SelfGravityRk2IsBitIdentical) { expect_restart_identical<3>(gravity_scene("rk2_adaptive"), "grav_rk2", 1); }
 
