@@ -4,7 +4,8 @@
 // (test_parity_scenes.cpp, label unit), so that an invalid scene is caught
 // by .ci/run rather than on a rare GPU host (issue #15 item 1).
 //
-// 3-D hydro with summation density on a periodic box (the Sod tube), 2-D
+// 3-D hydro with summation density on a periodic box (the Sod tube, also
+// with the viscosity switch), 2-D
 // solids with artificial stress, XSPH and a clamp of evolving boundary
 // particles (the oscillating plate, with either stress update), and 3-D self-gravity by direct
 // summation and by the octree, with damping (a small polytrope) - between
@@ -31,6 +32,14 @@ inline std::vector<std::string> steps_of(double dt, int steps) {
 // refuses.
 inline Scene sod3d(int steps) {
   return load_scene_file(src("verification/sod_shock_tube/sod_3d.toml"), steps_of(1e-3, steps));
+}
+
+// The Sod tube with the viscosity switch (physics/viscosity_switch.hpp):
+// per-particle alpha, its rate and its end-of-step bounds on both backends.
+inline Scene sod3d_switch(int steps) {
+  auto sets = steps_of(1e-3, steps);
+  sets.push_back("materials.gas.viscosity={alpha=1.0,beta=2.0,switch=\"morris_monaghan\"}");
+  return load_scene_file(src("verification/sod_shock_tube/sod_3d.toml"), sets);
 }
 
 inline Scene plate(int steps) {
@@ -78,6 +87,7 @@ struct ParityScene {
 inline const std::vector<ParityScene>& scenes() {
   static const std::vector<ParityScene> s = {
       {"Sod3D", sod3d},
+      {"Sod3DViscositySwitch", sod3d_switch},
       {"Plate", plate},
       {"PlateStaggered", plate_staggered},
       {"PolytropeDirect", polytrope},
