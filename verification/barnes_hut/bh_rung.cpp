@@ -393,7 +393,7 @@ int run_timing(const Args& args) {
     rubble::Octree tree(opt);
     std::vector<Vec<3>> a(n);
     double best_build = 1e30, best_walk = 1e30;
-    const int tree_reps = n <= 30000 ? 5 : 3;  // best of a few: robust to a busy machine
+    const int tree_reps = 5;  // best of five: robust to a busy machine (3 at 1e5 once gave 1.37 for 1.24)
     for (int rep = 0; rep < tree_reps; ++rep) {
       auto t0 = std::chrono::steady_clock::now();
       tree.build(x.data(), m.data(), nullptr, n);
