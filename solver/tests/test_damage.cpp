@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "scene_error.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/drivers/particle_rates.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -428,14 +429,7 @@ std::string stretched_block(const std::string& damage, double speed = 0.1, doubl
 
 const char* kDamage = "damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0 }";
 
-std::string parse_error(const std::string& text) {
-  try {
-    parse_scene(text, "t.toml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using rubble::test::parse_error;
 
 struct TempDir {
   std::filesystem::path path;

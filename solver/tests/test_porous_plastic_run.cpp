@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "scene_error.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
@@ -64,14 +65,7 @@ std::string rubber_block(const std::string& material_extra, const std::string& s
 }
 
 // The InputError message of parsing `text`, or "" when it parses.
-std::string parse_error(const std::string& text) {
-  try {
-    parse_scene(text, "t.toml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using rubble::test::parse_error;
 
 struct TempDir {
   std::filesystem::path path;

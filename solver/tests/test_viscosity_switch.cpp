@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "scene_error.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/viscosity_switch.hpp"
@@ -107,14 +108,7 @@ interval = 0.2
 )";
 }
 
-std::string parse_error(const std::string& text) {
-  try {
-    parse_scene(text, "t.toml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using rubble::test::parse_error;
 
 }  // namespace
 
