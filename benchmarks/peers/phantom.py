@@ -50,6 +50,7 @@ import json
 import os
 import re
 import resource
+import shlex
 import shutil
 import subprocess
 import time
@@ -78,8 +79,20 @@ MAKE_VARS = {"SETUP": "sedov", "SYSTEM": "gfortran", "IND_TIMESTEPS": "no", "OPE
 # sedov.in); rubble runs with simulation.h_tolerance at the same value.
 TOLH = 1e-4
 
-def build(phantom_src_dir=DEFAULT_SRC, build_dir=DEFAULT_BUILD, jobs=1, force=False):
+DEFAULT_BUILD_NATIVE = REPO / ".deps" / "phantom" / "build-sedov-native"
+
+# For a build compiled for this machine's processor (the counterpart of
+# rubble's -DRUBBLE_NATIVE=ON): the compiler command itself carries the flag,
+# so that every compile and link line of Phantom's Makefile gets it and none
+# of its own FFLAGS (-O3 -funroll-loops ...) is replaced.
+NATIVE_FC = "gfortran -march=native"
+
+
+def build(phantom_src_dir=DEFAULT_SRC, build_dir=None, jobs=1, force=False, native=False):
     """Build ``phantom`` and ``phantomsetup`` for the sedov setup.
+
+    native: compile with ``-march=native`` (``FC="gfortran -march=native"``)
+    in a build folder of its own (default .deps/phantom/build-sedov-native).
 
     Phantom's Makefile builds in ``<tree>/build`` and puts binaries in
     ``<tree>/bin``, and config.F90 includes ``../../build/phantom-version.h``
@@ -90,6 +103,8 @@ def build(phantom_src_dir=DEFAULT_SRC, build_dir=DEFAULT_BUILD, jobs=1, force=Fa
 
     Returns {"phantom", "phantomsetup", "build_dir", "commands", "log"}.
     """
+    if build_dir is None:
+        build_dir = DEFAULT_BUILD_NATIVE if native else DEFAULT_BUILD
     src = Path(phantom_src_dir).resolve()
     bdir = Path(build_dir).resolve()
     bindir = bdir / "bin"
@@ -100,8 +115,10 @@ def build(phantom_src_dir=DEFAULT_SRC, build_dir=DEFAULT_BUILD, jobs=1, force=Fa
         "log": str(bdir / "make.log"),
     }
     make_args = [f"{k}={v}" for k, v in MAKE_VARS.items()]
+    if native:
+        make_args.append(f"FC={NATIVE_FC}")
     cmds = [["make", f"-j{jobs}", *make_args, target] for target in ("phantom", "setup")]
-    paths["commands"] = [f"cd {bdir / 'build'} && " + " ".join(c) for c in cmds]
+    paths["commands"] = [f"cd {bdir / 'build'} && " + " ".join(shlex.quote(w) for w in c) for c in cmds]
     if not force and all(Path(paths[k]).is_file() for k in ("phantom", "phantomsetup")):
         return paths
 

@@ -6,7 +6,12 @@ build`; Phantom's source in .deps/phantom/src, see README.md here):
 
     python3 benchmarks/peers/sedov_vs_phantom.py [--threads 2]
         [--small 56:50] [--large 112:100] [--large-steps 10] [--out DIR]
-        [--skip-large] [--rubble-only] [--repeat N]
+        [--skip-large] [--rubble-only] [--repeat N] [--native]
+
+With --native both codes are compiled for this machine's processor:
+Phantom with -march=native in a build folder of its own, rubble from a
+build configured with -DRUBBLE_NATIVE=ON (default folder build-native; the
+script refuses a rubble build whose RUBBLE_NATIVE does not match).
 
 Two cases, each code as a whole process (set-up included), one after the
 other, with the same number of OpenMP threads:
@@ -149,6 +154,15 @@ def rate(r):
     return r["npart"] * r["steps"] / r["wall_s"]
 
 
+def rubble_is_native(build_dir):
+    """RUBBLE_NATIVE of a CMake build folder (None if it has no cache to read)."""
+    cache = build_dir / "CMakeCache.txt"
+    if not cache.is_file():
+        return None
+    m = re.search(r"^RUBBLE_NATIVE:BOOL=(\S+)", cache.read_text(), re.M)
+    return bool(m) and m.group(1).upper() in ("ON", "1", "TRUE", "YES")
+
+
 def table(small, large):
     lines = ["| case | code | particles | steps | t_end | wall [s] | particle-steps/s | peak RSS [MiB] | "
              "bytes/particle | shock radius | error vs exact |",
@@ -188,12 +202,24 @@ def main():
                          "code's run of median wall time, and every pair's speed ratio is listed (the machine's "
                          "noise: docs/performance.md)")
     ap.add_argument("--rubble-only", action="store_true", help="run rubble's half only")
-    ap.add_argument("--build", default=str(REPO / "build"), help="rubble's build folder")
+    ap.add_argument("--native", action="store_true",
+                    help="both codes compiled for this machine's processor: Phantom with -march=native (its own "
+                         "build folder), rubble from a build configured with -DRUBBLE_NATIVE=ON (default folder "
+                         "build-native); docs/performance.md")
+    ap.add_argument("--build", default=None, help="rubble's build folder (default build, or build-native with --native)")
     ap.add_argument("--out", default=str(REPO / "build" / "peers"))
     a = ap.parse_args()
     if a.repeat < 1:
         ap.error("--repeat must be at least 1")
 
+    if a.build is None:
+        a.build = str(REPO / ("build-native" if a.native else "build"))
+    # The comparison is only matched if both codes were compiled alike.
+    native_build = rubble_is_native(Path(a.build))
+    if native_build is not None and native_build != a.native:
+        sys.exit(f"sedov_vs_phantom: {a.build} was configured with RUBBLE_NATIVE={'ON' if native_build else 'OFF'}, "
+                 f"but Phantom would be built {'with' if a.native else 'without'} -march=native; "
+                 + ("configure it with -DRUBBLE_NATIVE=ON" if a.native else "pass --native or another --build"))
     rubble = Path(a.build) / "rubble"
     rung = Path(a.build) / "verification" / "sedov_taylor" / "sedov_rung"
     for p in (rubble, rung):
@@ -211,7 +237,7 @@ def main():
                   "running rubble's half only", file=sys.stderr)
         else:
             phantom = phantom_mod
-            paths = phantom.build()
+            paths = phantom.build(native=a.native)
 
     (nr, npx), (nr_l, npx_l) = a.small, a.large
     runs = []  # (rubble, Phantom or None) per repetition, one after the other
@@ -243,6 +269,8 @@ def main():
                  "second = " + ", ".join(f"{q:.2f}" for q in ratios) + f"; median {statistics.median(ratios):.2f}")
     print(text)
     command = f"python3 benchmarks/peers/sedov_vs_phantom.py --threads {a.threads}"
+    if a.native:
+        command += " --native"
     if a.repeat > 1:
         command += f" --repeat {a.repeat}"
     (out / "sedov_vs_phantom.md").write_text(f"Command: {command}\n\n" + text + "\n")
