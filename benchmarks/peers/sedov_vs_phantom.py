@@ -232,7 +232,8 @@ def main():
     if not a.rubble_only:
         import phantom as phantom_mod
         src = phantom_mod.DEFAULT_SRC
-        if not (src / "src").exists() and not (phantom_mod.DEFAULT_BUILD / "bin" / "phantom").exists():
+        built = phantom_mod.DEFAULT_BUILD_NATIVE if a.native else phantom_mod.DEFAULT_BUILD
+        if not (src / "src").exists() and not (built / "bin" / "phantom").exists():
             print(f"sedov_vs_phantom: Phantom's source is not in {src} (README.md says how to get it); "
                   "running rubble's half only", file=sys.stderr)
         else:
