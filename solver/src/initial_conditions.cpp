@@ -270,8 +270,9 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
       ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(b.density));
       if (!ps.alpha.empty()) ps.alpha[next] = Real(alpha0);
       if (!ps.av_alpha.empty()) ps.av_alpha[next] = initial_viscosity_alpha(materials[b.material_id]);
-      if (!ps.wall_normal.empty() && b.wall_free_slip)
+      if (!ps.wall_normal.empty() && b.sliding_wall())
         for (int k = 0; k < D; ++k) ps.wall_normal[next][k] = Real(b.wall_normal[k]);
+      if (!ps.wall_friction.empty()) ps.wall_friction[next] = Real(b.wall_friction);
       if (!ps.boundary.empty())
         ps.boundary[next] = b.boundary == BoundaryKind::None                   ? kFreeParticle
                             : b.boundary_state == BoundaryState::Evolving     ? kBoundaryEvolving
@@ -461,7 +462,8 @@ FieldNeeds field_needs(const Scene& scene) {
   for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
   for (const BodyConfig& b : scene.bodies) {
     needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
-    needs.free_slip = needs.free_slip || b.wall_free_slip;
+    needs.free_slip = needs.free_slip || b.sliding_wall();
+    needs.wall_friction = needs.wall_friction || b.wall_slip == WallSlip::Coulomb;
   }
   needs.xsph = sim.xsph > 0;
   needs.kernel_correction = needs.solid && sim.kernel_correction;

@@ -992,7 +992,7 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
-                                    "velocity", "velocity_gradient", "boundary", "boundary_state", "wall_slip",
+                                    "velocity", "velocity_gradient", "boundary", "boundary_state", "wall_slip", "wall_friction",
                                     "wall_normal"};
   if (round) known.insert(known.end(), {"center", "radius"});
   else known.insert(known.end(), {"min", "max"});
@@ -1115,25 +1115,36 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
                                {"extrapolated", BoundaryState::Extrapolated}});
   }
   // Walls (issue #12): no-slip (the default: the wall's velocity enters the
-  // velocity gradient and the viscosity like any neighbour's) or free-slip
-  // (only the relative velocity along the wall normal counts).
-  if (t.contains("wall_slip") || t.contains("wall_normal")) {
-    if (b.boundary == BoundaryKind::None)
-      fail(p + (t.contains("wall_slip") ? ".wall_slip" : ".wall_normal"),
-           "only a boundary body (boundary = \"fixed\" or \"moving\") is a wall",
-           t.get(t.contains("wall_slip") ? "wall_slip" : "wall_normal"));
-    b.wall_free_slip = choice(t, "wall_slip", p, false, {{"no_slip", false}, {"free_slip", true}});
-    if (b.wall_free_slip) {
-      const auto n = vector(t, "wall_normal", p);
-      if (!n) fail(p + ".wall_normal", "missing: a free_slip wall needs its unit normal (pointing into the material it holds)");
-      double len = 0;
-      for (int a = 0; a < dim_; ++a) len += (*n)[a] * (*n)[a];
-      if (!(len > 0)) fail(p + ".wall_normal", "is the zero vector; give the wall's normal, e.g. [0, 1] for a floor",
-                           t.get("wall_normal"));
-      for (int a = 0; a < dim_; ++a) b.wall_normal[a] = (*n)[a] / std::sqrt(len);
-    } else if (t.contains("wall_normal")) {
-      fail(p + ".wall_normal", "only a free_slip wall uses a normal (wall_slip = \"free_slip\")", t.get("wall_normal"));
-    }
+  // velocity gradient and the viscosity like any neighbour's), free-slip
+  // (only the relative velocity along the wall normal counts, and only the
+  // normal part of the wall's force) or Coulomb (free-slip plus friction
+  // wall_friction x the normal push; physics/wall_friction.hpp).
+  for (const char* key : {"wall_slip", "wall_normal", "wall_friction"})
+    if (t.contains(key) && b.boundary == BoundaryKind::None)
+      fail(p + "." + key, "only a boundary body (boundary = \"fixed\" or \"moving\") is a wall", t.get(key));
+  b.wall_slip = choice(t, "wall_slip", p, WallSlip::NoSlip,
+                       {{"no_slip", WallSlip::NoSlip}, {"free_slip", WallSlip::FreeSlip}, {"coulomb", WallSlip::Coulomb}});
+  if (b.sliding_wall()) {
+    const auto n = vector(t, "wall_normal", p);
+    if (!n)
+      fail(p + ".wall_normal", std::string("missing: a ") + (b.wall_slip == WallSlip::Coulomb ? "coulomb" : "free_slip") +
+                                   " wall needs its unit normal (pointing into the material it holds)");
+    double len = 0;
+    for (int a = 0; a < dim_; ++a) len += (*n)[a] * (*n)[a];
+    if (!(len > 0)) fail(p + ".wall_normal", "is the zero vector; give the wall's normal, e.g. [0, 1] for a floor",
+                         t.get("wall_normal"));
+    for (int a = 0; a < dim_; ++a) b.wall_normal[a] = (*n)[a] / std::sqrt(len);
+  } else if (t.contains("wall_normal")) {
+    fail(p + ".wall_normal", "only a sliding wall uses a normal (wall_slip = \"free_slip\" or \"coulomb\")",
+         t.get("wall_normal"));
+  }
+  if (b.wall_slip == WallSlip::Coulomb) {
+    b.wall_friction = required_number(t, "wall_friction", p, "the Coulomb friction coefficient mu of a coulomb wall");
+    require(b.wall_friction > 0, t, "wall_friction", p, b.wall_friction,
+            "> 0 (a frictionless wall is wall_slip = \"free_slip\")");
+  } else if (t.contains("wall_friction")) {
+    fail(p + ".wall_friction", "only a coulomb wall has a friction coefficient (wall_slip = \"coulomb\")",
+         t.get("wall_friction"));
   }
   return b;
 }

@@ -5,7 +5,8 @@
 // known exactly: a porous block at rest keeps alpha0, a compressed porous
 // rod never lets alpha rise, a block in free fall gains v = -g t and
 // conserves kinetic + internal + potential energy, a block sliding on a
-// free-slip wall keeps its momentum while a no-slip wall brakes it.
+// free-slip wall keeps its momentum while a no-slip wall brakes it, and a
+// Coulomb wall brakes it by mu times its push.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -233,7 +234,7 @@ TEST(BodyForceAndWallScene, KeysAreValidated) {
   const std::string wall = "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, -0.3]\nmax = [1.0, 0.0]\n"
                            "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\nboundary = \"fixed\"\n";
   const Scene w = parse_scene(rubber_block("", "", wall + "wall_slip = \"free_slip\"\nwall_normal = [0.0, 2.0]\n"), "t.toml");
-  EXPECT_TRUE(w.bodies[1].wall_free_slip);
+  EXPECT_EQ(w.bodies[1].wall_slip, WallSlip::FreeSlip);
   EXPECT_DOUBLE_EQ(w.bodies[1].wall_normal[1], 1.0);  // normalised
   EXPECT_NE(parse_error(rubber_block("", "", wall + "wall_slip = \"free_slip\"\n")).find("bodies[1].wall_normal"),
             std::string::npos);
@@ -384,6 +385,133 @@ TEST(WallRun, FreeSlipKeepsTangentialMomentumNoSlipBrakes) {
   const double p0 = px(free_slip.front());
   EXPECT_NEAR(px(free_slip.back()), p0, 1e-12 * std::fabs(p0));
   EXPECT_LT(px(no_slip.back()), 0.99 * p0);
+}
+
+// ---- Coulomb walls (issue #12 item 5; physics/wall_friction.hpp) ------------
+
+// A 1 x 0.5 elastic block (rho = 1, K = 100 so c = 10, G = 30) on a Coulomb
+// floor at y = 0 (normal +y, friction mu), under the uniform acceleration
+// `gravity`, starting with velocity (vx, 0). A tilted gravity
+// (g sin theta, -g cos theta) is the block on an incline of angle theta.
+std::string block_on_floor(double gx, double gy, double mu, double vx, double end_time) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "[simulation]\ndimension = 2\nend_time = " << end_time << "\nintegrator = \"leapfrog\"\n"
+    << "gravity = [" << gx << ", " << gy << "]\n"
+    << "[materials.block]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 100.0, n = 1.0 }\nshear_modulus = 30.0\n"
+    << "[[bodies]]\nshape = \"box\"\nmaterial = \"block\"\nmin = [0.0, 0.0]\nmax = [1.0, 0.5]\n"
+       "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\nvelocity = [" << vx << ", 0.0]\n"
+    << "[[bodies]]\nshape = \"box\"\nmaterial = \"block\"\nmin = [-1.0, -0.3]\nmax = [3.0, 0.0]\n"
+       "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\nboundary = \"fixed\"\n"
+       "wall_slip = \"coulomb\"\nwall_normal = [0.0, 1.0]\nwall_friction = " << mu << "\n"
+    << "[output]\ninterval = " << end_time / 4 << "\n";
+  return s.str();
+}
+
+struct Momentum {
+  double M = 0, px = 0, py = 0;
+};
+Momentum free_momentum(const ParticleStore<2>& ps) {
+  Momentum out;
+  for (std::size_t i = 0; i < ps.n; ++i) {
+    if (ps.boundary[i]) continue;
+    out.M += ps.m[i];
+    out.px += ps.m[i] * ps.v[i][0];
+    out.py += ps.m[i] * ps.v[i][1];
+  }
+  return out;
+}
+
+TEST(BodyForceAndWallScene, CoulombWallKeysAreValidated) {
+  const std::string wall = "[[bodies]]\nshape = \"box\"\nmaterial = \"rubber\"\nmin = [0.0, -0.3]\nmax = [1.0, 0.0]\n"
+                           "spacing = 0.1\ndensity = 1.0\ninternal_energy = 0.0\nboundary = \"fixed\"\n";
+  const std::string coulomb = "wall_slip = \"coulomb\"\nwall_normal = [0.0, 1.0]\n";
+  const Scene w = parse_scene(rubber_block("", "", wall + coulomb + "wall_friction = 0.36\n"), "t.toml");
+  EXPECT_EQ(w.bodies[1].wall_slip, WallSlip::Coulomb);
+  EXPECT_DOUBLE_EQ(w.bodies[1].wall_friction, 0.36);
+  auto names = [&](const std::string& extra, const std::string& key) {
+    const std::string e = parse_error(rubber_block("", "", extra));
+    EXPECT_NE(e.find(key), std::string::npos) << e;
+  };
+  names(wall + coulomb, "bodies[1].wall_friction");                                  // missing
+  names(wall + coulomb + "wall_friction = 0.0\n", "bodies[1].wall_friction");        // use free_slip
+  names(wall + coulomb + "wall_friction = -0.2\n", "bodies[1].wall_friction");       // negative
+  names(wall + coulomb + "wall_friction = nan\n", "bodies[1].wall_friction");        // NaN
+  names(wall + "wall_slip = \"coulomb\"\nwall_friction = 0.3\n", "bodies[1].wall_normal");
+  names(wall + "wall_slip = \"free_slip\"\nwall_normal = [0.0, 1.0]\nwall_friction = 0.3\n", "bodies[1].wall_friction");
+  names(wall + "wall_friction = 0.3\n", "bodies[1].wall_friction");  // a no-slip wall has none
+  names(wall.substr(0, wall.find("boundary")) + "wall_friction = 0.3\n", "bodies[1].wall_friction");  // no wall
+}
+
+// Sliding on a Coulomb floor, Coulomb's law in aggregate: while every
+// contact slides, the floor's friction is mu times its push, so the
+// momentum it removes along the floor is mu times the momentum its push
+// adds normal to it: P_x(t) - P_x(0) = -mu (P_y(t) - P_y(0) + M g t) (the
+// block's internal forces cancel pairwise), to round-off. The push
+// averages the weight, so the block decelerates at mu g (Coulomb's kinetic
+// friction) up to its vertical bounce, which is small for this stiff block.
+TEST(WallRun, CoulombFloorBrakesASlidingBlockAtMuG) {
+  const double g = 1.0, mu = 0.3, v0 = 1.0, T = 1.0;
+  TempDir d("coulomb_slide");
+  const auto snaps = run_snapshots<2>(parse_scene(block_on_floor(0.0, -g, mu, v0, T), "t.toml"), d);
+  ASSERT_EQ(snaps.size(), 5u);
+  const Momentum m0 = free_momentum(snaps.front());
+  for (std::size_t k = 1; k < snaps.size(); ++k) {
+    const double t = T * double(k) / 4;
+    const Momentum m = free_momentum(snaps[k]);
+    EXPECT_NEAR(m.px - m0.px, -mu * (m.py - m0.py + m0.M * g * t), 1e-12 * m0.M) << "t = " << t;
+  }
+  const Momentum mT = free_momentum(snaps.back());
+  const double bounce = std::fabs(mT.py - m0.py) / (m0.M * g * T);  // the push's departure from the weight
+  EXPECT_LT(bounce, 0.05);
+  const double decel = (m0.px - mT.px) / (m0.M * T);
+  EXPECT_NEAR(decel, mu * g, mu * g * (bounce + 1e-9));
+  EXPECT_GT(mT.px / m0.M, 0.5 * v0);  // still sliding: every contact was above the stick speed
+}
+
+// On an incline (gravity tilted by theta). Above the friction angle
+// (tan theta = 0.5 > mu = 0.3), launched down the slope so that every
+// contact slides from the start, the block obeys Coulomb's law in aggregate
+// as above, v_x(t) = v0 + g sin(theta) t - mu (g cos(theta) t + v_y(t)), to
+// round-off, so it slides with g (sin theta - mu cos theta) up to its
+// bounce. Below it (tan theta = 0.2), from rest, it holds: it creeps only
+// at the regularised law's viscous speed, where k_max v = c/hM v carries
+// the slope's load; the floor's push reaches the bottom row (the second row
+// lies at 1.5 dx, beyond the push's reach but for its pressure's gradient),
+// whose particles then carry the whole block's load 5 x m g sin(theta):
+// v_creep = 5 g sin(theta) hM / c, hM = 1.2 dx (monaghan_h, cubic spline).
+TEST(WallRun, CoulombFloorHoldsBelowTheFrictionAngleAndSlidesAbove) {
+  const double g = 1.0, mu = 0.3, T = 1.0;
+  auto run = [&](double tan_theta, double v0, const std::string& name) {
+    const double theta = std::atan(tan_theta);
+    TempDir d(name);
+    const auto snaps = run_snapshots<2>(
+        parse_scene(block_on_floor(g * std::sin(theta), -g * std::cos(theta), mu, v0, T), "t.toml"), d);
+    const Momentum m = free_momentum(snaps.back());
+    return std::make_pair(m.px / m.M, m.py / m.M);
+  };
+  {
+    const double theta = std::atan(0.5), v0 = 0.5;
+    const auto v = run(0.5, v0, "incline_slides");
+    EXPECT_NEAR(v.first, v0 + g * std::sin(theta) * T - mu * (g * std::cos(theta) * T + v.second), 1e-12);
+    const double bounce = std::fabs(v.second) / (g * std::cos(theta) * T);
+    EXPECT_LT(bounce, 0.05);
+    EXPECT_NEAR(v.first - v0, g * (std::sin(theta) - mu * std::cos(theta)) * T,
+                mu * g * std::cos(theta) * T * (bounce + 1e-9));
+  }
+  {
+    const double theta = std::atan(0.2);
+    const auto v = run(0.2, 0.0, "incline_holds");
+    const double frictionless = g * std::sin(theta) * T;
+    const double creep = 5 * g * std::sin(theta) * (1.2 * 0.1) / 10.0;
+    std::printf("incline below the friction angle: mean speed %.3e (creep estimate %.3e, frictionless %.3e)\n",
+                v.first, creep, frictionless);
+    // it holds: a small fraction of the frictionless speed, and that is the
+    // documented creep (the steady estimate; 10 % for the block's own
+    // elastic start, which is not in it)
+    EXPECT_LT(std::fabs(v.first), 0.1 * frictionless);
+    EXPECT_NEAR(v.first, creep, 0.1 * creep);
+  }
 }
 
 // Adami, Hu & Adams 2012's hydrostatic tank: a liquid column (Murnaghan,

@@ -21,7 +21,7 @@ constexpr Real kInf = std::numeric_limits<Real>::infinity();
 ParticleStore<2> one_particle() {
   FieldNeeds all;
   all.continuity_density = all.summation_density = all.gravity = all.solid = all.boundary = all.xsph = true;
-  all.porosity = all.plasticity = all.free_slip = all.inelastic_volume = true;
+  all.porosity = all.plasticity = all.free_slip = all.wall_friction = all.inelastic_volume = true;
   ParticleStore<2> ps;
   ps.allocate(1, all);
   ps.rho[0] = 1;

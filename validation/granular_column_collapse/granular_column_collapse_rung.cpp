@@ -539,9 +539,11 @@ Json common_parameters(const rubble::Scene& base, const Args& args) {
                        {"shifting", base.simulation.shifting},
                        {"integrator", base.simulation.integrator == rubble::Integrator::Leapfrog ? "leapfrog" : "rk2_adaptive"},
                        {"floor_state", rubble::boundary_state_name(base.bodies[1].boundary_state)},
-                       {"floor_free_slip", base.bodies[1].wall_free_slip},
+                       {"floor_slip", rubble::wall_slip_name(base.bodies[1].wall_slip)},
+                       {"floor_friction", base.bodies[1].wall_friction},
                        {"wall_state", rubble::boundary_state_name(base.bodies[2].boundary_state)},
-                       {"wall_free_slip", base.bodies[2].wall_free_slip},
+                       {"wall_slip", rubble::wall_slip_name(base.bodies[2].wall_slip)},
+                       {"wall_friction", base.bodies[2].wall_friction},
                        {"eps_threshold", kEpsThreshold},
                        {"report_only", args.report_only}});
 }

@@ -28,6 +28,7 @@
 #include "rubble/physics/solid.hpp"
 #include "rubble/physics/timestep.hpp"
 #include "rubble/physics/wall_extrapolation.hpp"
+#include "rubble/physics/wall_friction.hpp"
 #include "rubble/physics/xsph.hpp"
 
 namespace rubble {
@@ -99,16 +100,46 @@ constexpr Real kCorrectionMinDet = Real(1e-3);
 
 // ---- walls ---------------------------------------------------------------
 
-// The velocity particle a sees for neighbour b. A free-slip wall particle
-// (a boundary particle with a wall normal n) takes a's own tangential
-// velocity, v_b' = v_a - ((v_a - v_b).n) n, so that only the approach
-// along the normal acts (no wall friction in the velocity gradient, the
-// viscosity or XSPH); any other neighbour is seen as it moves.
+// Whether neighbour b of free particle a is a sliding-wall particle (a
+// boundary particle with a wall normal: wall_slip = "free_slip" or
+// "coulomb"). A no-slip wall particle in the same run has a zero normal.
+template <int D>
+RUBBLE_HD_INLINE bool sliding_wall_pair(const StoreView<D>& s, std::uint32_t a, std::uint32_t b) {
+  return s.wall_normal && s.boundary[b] && !s.boundary[a] && norm2(s.wall_normal[b]) > Real(0);
+}
+
+// The velocity particle a sees for neighbour b. A sliding-wall particle
+// (sliding_wall_pair) takes a's own tangential velocity,
+// v_b' = v_a - ((v_a - v_b).n) n, so that only the approach along the
+// normal acts (no wall friction in the velocity gradient, the viscosity or
+// XSPH; a Coulomb wall's friction is a force of its own, wall_friction.hpp);
+// any other neighbour is seen as it moves.
 template <int D>
 RUBBLE_HD_INLINE Vec<D> seen_velocity(const StoreView<D>& s, std::uint32_t a, std::uint32_t b) {
-  if (!s.wall_normal || !s.boundary[b]) return s.v[b];
+  if (!sliding_wall_pair<D>(s, a, b)) return s.v[b];
   const Vec<D> n = s.wall_normal[b];
   return s.v[a] - dot(s.v[a] - s.v[b], n) * n;
+}
+
+// The pair acceleration f that free particle a receives from neighbour b:
+// all of it from any neighbour but a sliding-wall particle, whose part is
+// collected in w instead and applied after the sum (wall_reaction_particle).
+template <int D>
+RUBBLE_HD_INLINE Vec<D> wall_filtered_force(const StoreView<D>& s, std::uint32_t a, std::uint32_t b, const Vec<D>& f,
+                                            WallContact<D>& w) {
+  if (!sliding_wall_pair<D>(s, a, b)) return f;
+  wall_contact_add<D>(w, f, s.wall_normal[b], s.wall_friction ? s.wall_friction[b] : Real(0), s.v[b]);
+  return Vec<D>::zero();
+}
+
+// The sliding walls' push and Coulomb friction on particle a from its
+// contact sums, with the stick regime's rate c_a / hM_a (wall_friction.hpp).
+template <int D>
+RUBBLE_HD_INLINE WallReaction<D> wall_reaction_particle(const RhsContext<D>& c, std::uint32_t a,
+                                                        const WallContact<D>& w) {
+  if (w.count == 0) return WallReaction<D>{};
+  const Real hM = monaghan_h<D>(c.kernel, c.s.h[a]);
+  return wall_reaction<D>(w, c.s.v[a], c.s.cs[a] > Real(0) ? c.s.cs[a] / hM : Real(1) / hM);
 }
 
 // Whether particle a's state (rho, u, S, alpha, plastic strain) follows
@@ -432,6 +463,7 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   const HydroSide<D> pa = hydro_side<D>(c.kernel, hydro_particle<D>(c, a));
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
+  WallContact<D> wall;
   each([&](std::uint32_t b) {
     // A listed neighbour outside both supports (the search skin) adds
     // nothing: skip it before b's side (two divisions) is prepared.
@@ -441,11 +473,14 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
     HydroParticle<D> pb = hydro_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
     const HydroPairRates<D> r = hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true), dx, !c.summation);
-    dvdt += r.dvdt;
+    dvdt += wall_filtered_force<D>(s, a, b, r.dvdt, wall);
     dudt += r.dudt;
     drhodt += r.drhodt;
     mu_max = r.mu > mu_max ? r.mu : mu_max;
   });
+  const WallReaction<D> reaction = wall_reaction_particle<D>(c, a, wall);
+  dvdt += reaction.dvdt;
+  dudt += reaction.dudt;
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   if (!c.summation) s.drhodt[a] = drhodt;
@@ -667,6 +702,7 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
   const SolidInverses ia = solid_inverses_particle<D>(c, a);
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
+  WallContact<D> wall;
   each([&](std::uint32_t b) {
     const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
     const Real h_max = pa.h > s.h[b] ? pa.h : s.h[b];
@@ -675,11 +711,14 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
     pb.v = seen_velocity<D>(s, a, b);
     const SolidPairRates<D> r =
         solid_pair<D>(c.kernel, pa, ia, pb, solid_inverses_particle<D>(c, b), dx);
-    dvdt += r.dvdt;
+    dvdt += wall_filtered_force<D>(s, a, b, r.dvdt, wall);
     dudt += r.dudt;
     drhodt += r.drhodt;
     mu_max = r.mu > mu_max ? r.mu : mu_max;
   });
+  const WallReaction<D> reaction = wall_reaction_particle<D>(c, a, wall);
+  dvdt += reaction.dvdt;
+  dudt += reaction.dudt;
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   s.drhodt[a] = drhodt;

@@ -33,7 +33,8 @@ struct FieldNeeds {
   bool kernel_correction = false;   // solids with simulation.kernel_correction: K = C^T is stored
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
-  bool free_slip = false;           // a wall is free-slip: wall_normal is stored
+  bool free_slip = false;           // a wall slides (free-slip or Coulomb): wall_normal is stored
+  bool wall_friction = false;       // a wall has Coulomb friction: wall_friction is stored
   bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
   bool damage = false;              // a solid material has tensile damage: the damage and flaw fields are stored
   bool viscosity_switch = false;    // a material has the viscosity switch: av_alpha and dav_alpha_dt are stored
@@ -123,9 +124,12 @@ struct ParticleStore {
   std::vector<Real> av_alpha;      // [1] (evolved)
   std::vector<Real> dav_alpha_dt;  // [1/s]
 
-  // free-slip walls (allocated only when a boundary body is free-slip): the
-  // wall's unit normal on its particles, zero on every other particle
+  // sliding walls (allocated only when a boundary body is free-slip or
+  // Coulomb): the wall's unit normal on its particles, zero on every other
+  // particle; and, only when a wall is Coulomb, its friction coefficient
+  // (0 on every other particle)
   std::vector<Vec<D>> wall_normal;  // [1]
+  std::vector<Real> wall_friction;  // [1]
 
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
@@ -192,6 +196,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"eps_p", &PS::eps_p, "1", FieldRole::Evolved, true},
       {"eps_v", &PS::eps_v, "1", FieldRole::Evolved, true},
       {"wall_normal", &PS::wall_normal, "1", FieldRole::Constant, false},
+      {"wall_friction", &PS::wall_friction, "1", FieldRole::Constant, false},
       {"damage_root", &PS::damage_root, "1", FieldRole::Evolved, true},
       {"ddamage_root_dt", &PS::ddamage_root_dt, "1/s", FieldRole::Rate, false},
       {"flaw_count", &PS::flaw_count, "1", FieldRole::Constant, true},
@@ -244,6 +249,7 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   if (needs.plasticity) eps_p.assign(n, 0);
   if (needs.inelastic_volume) eps_v.assign(n, 0);
   if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
+  if (needs.wall_friction) wall_friction.assign(n, 0);
   if (needs.damage) {
     damage_root.assign(n, 0);
     ddamage_root_dt.assign(n, 0);

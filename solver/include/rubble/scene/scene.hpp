@@ -199,6 +199,12 @@ inline const char* boundary_state_name(BoundaryState s) {
   return s == BoundaryState::Evolving ? "evolving" : s == BoundaryState::Extrapolated ? "extrapolated" : "frozen";
 }
 
+// A wall's tangential behaviour (BodyConfig::wall_slip).
+enum class WallSlip : int { NoSlip = 0, FreeSlip = 1, Coulomb = 2 };
+inline const char* wall_slip_name(WallSlip s) {
+  return s == WallSlip::FreeSlip ? "free_slip" : s == WallSlip::Coulomb ? "coulomb" : "no_slip";
+}
+
 struct BodyConfig {
   BodyShape shape = BodyShape::Box;
   std::string material;      // name of a [materials] entry
@@ -223,11 +229,16 @@ struct BodyConfig {
   // physics/wall_extrapolation.hpp); walls and floors that hold granular
   // material or a fluid.
   BoundaryState boundary_state = BoundaryState::Frozen;
-  // Walls (boundary bodies): wall_slip = "free_slip" makes the wall
-  // frictionless: its particles' relative velocity to a neighbour counts
-  // only along wall_normal (unit, pointing into the material). Default no-slip.
-  bool wall_free_slip = false;
+  // Walls (boundary bodies), wall_slip: "no_slip" (default): the wall's
+  // particles are seen like any neighbour. "free_slip": frictionless: a
+  // neighbour sees their velocity only along wall_normal (unit, pointing
+  // into the material) and receives only the normal part of their force.
+  // "coulomb": the same, plus Coulomb friction wall_friction x the normal
+  // push (physics/wall_friction.hpp).
+  WallSlip wall_slip = WallSlip::NoSlip;
   std::array<double, 3> wall_normal{};
+  double wall_friction = 0;  // Coulomb friction coefficient mu (>= 0)
+  bool sliding_wall() const { return wall_slip != WallSlip::NoSlip; }
   // shape = "polytrope" (3-D only): a self-gravitating polytrope in
   // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
   // solution; K follows from radius, mass, n and gravity.G. The parser
