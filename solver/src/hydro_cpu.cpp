@@ -132,6 +132,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   plasticity_ = f.plasticity;
   damage_ = f.damage;
   viscosity_switch_ = f.viscosity_switch;
+  coulomb_walls_ = !ps_.wall_anchor.empty();
   body_force_ = f.body_force;
   wall_extrapolation_ = f.wall_extrapolation;
   for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
@@ -585,7 +586,7 @@ void HydroCpu<D>::body_force() {
 
 template <int D>
 void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
-  if (!(porosity_ || plasticity_ || damage_ || viscosity_switch_ || shifting_ > Real(0))) return;
+  if (!(porosity_ || plasticity_ || damage_ || viscosity_switch_ || coulomb_walls_ || shifting_ > Real(0))) return;
   const ScopedSeconds timer(phases_.end_step);
   const std::size_t n = ps_.n;
   const RhsContext<D> c = context();
@@ -609,6 +610,10 @@ void HydroCpu<D>::end_step(const Real* alpha_start, Real dt) {
     if (plasticity_) plastic_return(true);
   }
   if (shifting_ > Real(0)) shift_particles(dt);
+  if (coulomb_walls_) {  // after the shift: a shift along a wall stretches the friction spring like any motion
+#pragma omp parallel for if (n > 4096)
+    for (std::size_t a = 0; a < n; ++a) wall_anchor_end_step_particle<D>(c, static_cast<std::uint32_t>(a));
+  }
 }
 
 // Particle shifting (physics/particle_shifting.hpp) with the neighbour

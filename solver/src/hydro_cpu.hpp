@@ -136,6 +136,7 @@ class HydroCpu {
   std::vector<Vec<D>> shift_;  // particle shifting: this step's shifts (scratch)
   bool porosity_ = false, plasticity_ = false, damage_ = false, body_force_ = false, wall_extrapolation_ = false;
   bool viscosity_switch_ = false;  // a material has the viscosity switch (end-of-step bounds)
+  bool coulomb_walls_ = false;     // a wall has Coulomb friction (end-of-step friction anchors)
   Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
   std::int64_t evaluations_ = 0;
   RhsPhaseSeconds phases_;

@@ -284,6 +284,8 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
       ++next;
     }
   }
+  // Coulomb walls: every friction spring starts relaxed (wall_friction.hpp)
+  if (!ps.wall_anchor.empty()) ps.wall_anchor = ps.x;
   apply_energy_deposits<D>(scene, ps);
   draw_body_flaws<D>(scene, first, ps);
   return first;

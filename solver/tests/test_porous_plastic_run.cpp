@@ -474,43 +474,47 @@ TEST(WallRun, CoulombFloorBrakesASlidingBlockAtMuG) {
 // contact slides from the start, the block obeys Coulomb's law in aggregate
 // as above, v_x(t) = v0 + g sin(theta) t - mu (g cos(theta) t + v_y(t)), to
 // round-off, so it slides with g (sin theta - mu cos theta) up to its
-// bounce. Below it (tan theta = 0.2), from rest, it holds: it creeps only
-// at the regularised law's viscous speed, where k_max v = c/hM v carries
-// the slope's load; the floor's push reaches the bottom row (the second row
-// lies at 1.5 dx, beyond the push's reach but for its pressure's gradient),
-// whose particles then carry the whole block's load 5 x m g sin(theta):
-// v_creep = 5 g sin(theta) hM / c, hM = 1.2 dx (monaghan_h, cubic spline).
+// bounce. Below it (tan theta = 0.2), from rest, it holds. It slips a
+// little while it lands (it starts stress-free, so the floor's push, and
+// with it the friction, builds up over the first ~0.1 s: measured 2.4e-3
+// in the first 0.5 s); from then on it stays, where a regularised Coulomb
+// law (viscous below a stick speed) let it creep on at ~1e-2.
 TEST(WallRun, CoulombFloorHoldsBelowTheFrictionAngleAndSlidesAbove) {
-  const double g = 1.0, mu = 0.3, T = 1.0;
-  auto run = [&](double tan_theta, double v0, const std::string& name) {
+  const double g = 1.0, mu = 0.3;
+  auto cm_x = [](const ParticleStore<2>& ps) {
+    double mx = 0, m = 0;
+    for (std::size_t i = 0; i < ps.n; ++i)
+      if (!ps.boundary[i]) mx += ps.m[i] * ps.x[i][0], m += ps.m[i];
+    return mx / m;
+  };
+  auto run = [&](double tan_theta, double v0, double T, const std::string& name) {
     const double theta = std::atan(tan_theta);
     TempDir d(name);
-    const auto snaps = run_snapshots<2>(
+    return run_snapshots<2>(
         parse_scene(block_on_floor(g * std::sin(theta), -g * std::cos(theta), mu, v0, T), "t.toml"), d);
-    const Momentum m = free_momentum(snaps.back());
-    return std::make_pair(m.px / m.M, m.py / m.M);
   };
   {
-    const double theta = std::atan(0.5), v0 = 0.5;
-    const auto v = run(0.5, v0, "incline_slides");
-    EXPECT_NEAR(v.first, v0 + g * std::sin(theta) * T - mu * (g * std::cos(theta) * T + v.second), 1e-12);
-    const double bounce = std::fabs(v.second) / (g * std::cos(theta) * T);
+    const double theta = std::atan(0.5), v0 = 0.5, T = 1.0;
+    const Momentum m = free_momentum(run(0.5, v0, T, "incline_slides").back());
+    const double vx = m.px / m.M, vy = m.py / m.M;
+    EXPECT_NEAR(vx, v0 + g * std::sin(theta) * T - mu * (g * std::cos(theta) * T + vy), 1e-12);
+    const double bounce = std::fabs(vy) / (g * std::cos(theta) * T);
     EXPECT_LT(bounce, 0.05);
-    EXPECT_NEAR(v.first - v0, g * (std::sin(theta) - mu * std::cos(theta)) * T,
+    EXPECT_NEAR(vx - v0, g * (std::sin(theta) - mu * std::cos(theta)) * T,
                 mu * g * std::cos(theta) * T * (bounce + 1e-9));
   }
   {
-    const double theta = std::atan(0.2);
-    const auto v = run(0.2, 0.0, "incline_holds");
-    const double frictionless = g * std::sin(theta) * T;
-    const double creep = 5 * g * std::sin(theta) * (1.2 * 0.1) / 10.0;
-    std::printf("incline below the friction angle: mean speed %.3e (creep estimate %.3e, frictionless %.3e)\n",
-                v.first, creep, frictionless);
-    // it holds: a small fraction of the frictionless speed, and that is the
-    // documented creep (the steady estimate; 10 % for the block's own
-    // elastic start, which is not in it)
-    EXPECT_LT(std::fabs(v.first), 0.1 * frictionless);
-    EXPECT_NEAR(v.first, creep, 0.1 * creep);
+    const double theta = std::atan(0.2), T = 2.0;
+    const auto snaps = run(0.2, 0.0, T, "incline_holds");  // outputs at 0, 0.5, 1, 1.5, 2
+    ASSERT_EQ(snaps.size(), 5u);
+    const double landed = cm_x(snaps[1]) - cm_x(snaps[0]);
+    const double after = cm_x(snaps.back()) - cm_x(snaps[1]);
+    const double frictionless = 0.5 * g * std::sin(theta) * (T * T - 0.25);  // from t = 0.5 to T
+    std::printf("incline below the friction angle: moved %.3e while landing, %.3e after (frictionless %.3e)\n",
+                landed, after, frictionless);
+    // landing: the free slide of the first ~0.15 s, a small part of the frictionless 0.5 s
+    EXPECT_LT(std::fabs(landed), 0.25 * 0.5 * g * std::sin(theta) * 0.25);
+    EXPECT_LT(std::fabs(after), 1e-3 * frictionless);
   }
 }
 

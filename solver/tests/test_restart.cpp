@@ -232,6 +232,14 @@ TEST(Restart, KernelCorrectionIsBitIdentical) {
   expect_restart_identical<2>(text, "solid_corr", 2);
 }
 TEST(Restart, GranularWallsAndShiftingAreBitIdentical) { expect_restart_identical<2>(granular_scene(), "granular", 2); }
+// A Coulomb floor: the resumed run continues with the friction anchors
+TEST(Restart, CoulombWallIsBitIdentical) {
+  std::string text = granular_scene();
+  const std::string wall = "boundary_state = \"extrapolated\"\n";
+  text.replace(text.find(wall), wall.size(),
+               wall + "wall_slip = \"coulomb\"\nwall_normal = [0.0, 1.0]\nwall_friction = 0.36\n");
+  expect_restart_identical<2>(text, "coulomb", 2);
+}
 TEST(Restart, DamageLeapfrogIsBitIdentical) { expect_restart_identical<2>(damage_scene("leapfrog"), "damage_lf", 2); }
 TEST(Restart, DamageRk2IsBitIdentical) { expect_restart_identical<2>(damage_scene("rk2_adaptive"), "damage_rk2", 2); }
 // The viscosity switch: each particle's alpha travels in the snapshots.

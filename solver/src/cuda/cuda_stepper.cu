@@ -732,6 +732,7 @@ struct CudaStepper<D>::Impl {
   bool summation, solid = false, kernel_correction = false, artificial_stress = false;
   bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
   bool viscosity_switch = false;  // a material has the viscosity switch (end-of-step bounds)
+  bool coulomb_walls = false;     // a wall has Coulomb friction (end-of-step friction anchors)
   bool staggered = false;  // solids: simulation.stress_update = "staggered" (leapfrog.hpp)
   Real stagger_dt = 0;     // inside a staggered evaluation: its dt
   Vec<D> g = Vec<D>::zero();  // simulation.gravity
@@ -798,6 +799,7 @@ struct CudaStepper<D>::Impl {
     plasticity = f.plasticity;
     damage = f.damage;
     viscosity_switch = f.viscosity_switch;
+    coulomb_walls = !ps.wall_anchor.empty();
     wall_extrapolation = f.wall_extrapolation;
     body_force = f.body_force;
     staggered = scene.simulation.stress_update == StressUpdate::Staggered && solid;
@@ -1117,6 +1119,9 @@ struct CudaStepper<D>::Impl {
       for_each_index("apply shifts", count,
                      [=] __device__(std::size_t i) { s.x[i] = dom.wrap(s.x[i] + out[i]); });
     }
+    if (coulomb_walls)  // after the shift (hydro_cpu.cpp: end_step)
+      for_each_index("end-of-step wall friction anchors", n(),
+                     [=] __device__(std::size_t i) { wall_anchor_end_step_particle<D>(c, std::uint32_t(i)); });
   }
 
   // The first non-finite particle and the time-step limit: one reduction.

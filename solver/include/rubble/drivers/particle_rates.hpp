@@ -132,14 +132,39 @@ RUBBLE_HD_INLINE Vec<D> wall_filtered_force(const StoreView<D>& s, std::uint32_t
   return Vec<D>::zero();
 }
 
-// The sliding walls' push and Coulomb friction on particle a from its
-// contact sums, with the stick regime's rate c_a / hM_a (wall_friction.hpp).
+// The frequency of particle a's wall-friction spring: c_a / hM_a
+// (wall_friction.hpp; 1/hM_a for a particle without sound speed).
+template <int D>
+RUBBLE_HD_INLINE Real wall_spring_frequency(const RhsContext<D>& c, std::uint32_t a) {
+  const Real hM = monaghan_h<D>(c.kernel, c.s.h[a]);
+  return (c.s.cs[a] > Real(0) ? c.s.cs[a] : Real(1)) / hM;
+}
+
+// The sliding walls' push and Coulomb friction on free particle a from its
+// contact sums (wall_friction.hpp); records the walls' grip on a for the
+// end of the step.
 template <int D>
 RUBBLE_HD_INLINE WallReaction<D> wall_reaction_particle(const RhsContext<D>& c, std::uint32_t a,
                                                         const WallContact<D>& w) {
-  if (w.count == 0) return WallReaction<D>{};
-  const Real hM = monaghan_h<D>(c.kernel, c.s.h[a]);
-  return wall_reaction<D>(w, c.s.v[a], c.s.cs[a] > Real(0) ? c.s.cs[a] / hM : Real(1) / hM);
+  const StoreView<D>& s = c.s;
+  WallReaction<D> r;
+  if (w.count > 0) {
+    const Vec<D> d = s.wall_anchor ? c.domain.separation(s.x[a], s.wall_anchor[a]) : Vec<D>::zero();
+    r = wall_reaction<D>(w, s.v[a], d, wall_spring_frequency<D>(c, a));
+  }
+  if (s.wall_grip) s.wall_grip[a] = r.grip;
+  return r;
+}
+
+// End of an accepted step, Coulomb walls: particle a's friction anchor
+// follows its slip, and is its position off the walls (wall_friction.hpp).
+template <int D>
+RUBBLE_HD_INLINE void wall_anchor_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (!s.wall_anchor || s.boundary[a]) return;
+  const Vec<D> d = wall_anchor_update<D>(c.domain.separation(s.x[a], s.wall_anchor[a]), s.wall_grip[a],
+                                         wall_spring_frequency<D>(c, a));
+  s.wall_anchor[a] = c.domain.wrap(s.x[a] - d);
 }
 
 // Whether particle a's state (rho, u, S, alpha, plastic strain) follows

@@ -34,7 +34,7 @@ struct FieldNeeds {
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
   bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
   bool free_slip = false;           // a wall slides (free-slip or Coulomb): wall_normal is stored
-  bool wall_friction = false;       // a wall has Coulomb friction: wall_friction is stored
+  bool wall_friction = false;       // a wall has Coulomb friction: wall_friction, wall_anchor, wall_grip are stored
   bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
   bool damage = false;              // a solid material has tensile damage: the damage and flaw fields are stored
   bool viscosity_switch = false;    // a material has the viscosity switch: av_alpha and dav_alpha_dt are stored
@@ -130,6 +130,12 @@ struct ParticleStore {
   // (0 on every other particle)
   std::vector<Vec<D>> wall_normal;  // [1]
   std::vector<Real> wall_friction;  // [1]
+  // ... and, with a Coulomb wall, on free particles: where each would sit
+  // with its friction spring relaxed (physics/wall_friction.hpp; x itself
+  // off the walls), and the walls' grip mu N along their push's direction
+  // in the last evaluation (0 off the walls)
+  std::vector<Vec<D>> wall_anchor;  // [m]
+  std::vector<Vec<D>> wall_grip;    // [m/s^2]
 
   void allocate(std::size_t count, const FieldNeeds& needs);
   // Apply a permutation: new particle i is old particle perm[i].
@@ -197,6 +203,8 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"eps_v", &PS::eps_v, "1", FieldRole::Evolved, true},
       {"wall_normal", &PS::wall_normal, "1", FieldRole::Constant, false},
       {"wall_friction", &PS::wall_friction, "1", FieldRole::Constant, false},
+      {"wall_anchor", &PS::wall_anchor, "m", FieldRole::Evolved, true},
+      {"wall_grip", &PS::wall_grip, "m/s^2", FieldRole::Derived, false},
       {"damage_root", &PS::damage_root, "1", FieldRole::Evolved, true},
       {"ddamage_root_dt", &PS::ddamage_root_dt, "1/s", FieldRole::Rate, false},
       {"flaw_count", &PS::flaw_count, "1", FieldRole::Constant, true},
@@ -249,7 +257,11 @@ void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
   if (needs.plasticity) eps_p.assign(n, 0);
   if (needs.inelastic_volume) eps_v.assign(n, 0);
   if (needs.free_slip) wall_normal.assign(n, Vec<D>::zero());
-  if (needs.wall_friction) wall_friction.assign(n, 0);
+  if (needs.wall_friction) {
+    wall_friction.assign(n, 0);
+    wall_anchor.assign(n, Vec<D>::zero());
+    wall_grip.assign(n, Vec<D>::zero());
+  }
   if (needs.damage) {
     damage_root.assign(n, 0);
     ddamage_root_dt.assign(n, 0);

@@ -57,6 +57,8 @@ struct StoreView {
   Real* eps_v = nullptr;
   Vec<D>* wall_normal = nullptr;
   Real* wall_friction = nullptr;
+  Vec<D>* wall_anchor = nullptr;
+  Vec<D>* wall_grip = nullptr;
   Real* damage_root = nullptr;
   Real* ddamage_root_dt = nullptr;
   std::int32_t* flaw_count = nullptr;
@@ -86,7 +88,8 @@ struct StoreView {
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
     set(corr_K, "corr_K");
     set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p"), set(eps_v, "eps_v");
-    set(wall_normal, "wall_normal"), set(wall_friction, "wall_friction");
+    set(wall_normal, "wall_normal"), set(wall_friction, "wall_friction"), set(wall_anchor, "wall_anchor");
+    set(wall_grip, "wall_grip");
     set(damage_root, "damage_root"), set(ddamage_root_dt, "ddamage_root_dt"), set(flaw_count, "flaw_count");
     set(flaw_eps_min, "flaw_eps_min"), set(flaw_eps_max, "flaw_eps_max"), set(flaws_active, "flaws_active");
     set(av_alpha, "av_alpha"), set(dav_alpha_dt, "dav_alpha_dt");

@@ -12,23 +12,31 @@
 // not stick to it. The sum is clipped as a whole, not pair by pair: with
 // shear stress at the wall the pairs' normal parts scatter about their sum.
 // The wall's tangential action is then friction alone, which for a Coulomb
-// wall is bounded by mu times the push (Coulomb's law of dry friction):
+// wall is bounded by mu times the push (Coulomb's law of dry friction). It
+// sticks or slips as a spring-slider does (the tangential contact law of
+// Cundall & Strack 1979, Geotechnique 29:47, here between a particle and
+// the wall): each free particle keeps an anchor, the point where it would
+// sit with its friction spring relaxed; with d_t the tangential part of
+// x_a - anchor_a and v_t that of its velocity relative to the wall
+// (tangential to the push's direction sum_b (f_ab·n_b) n_b),
 //
-//   a_fric = -k v_t,   k = min(mu N / |v_t|, k_max),
+//   trial  f = -omega^2 d_t - 2 omega v_t       (spring, critically damped)
+//   stick  |f| <= mu N:  a_fric = f
+//   slip   |f| >  mu N:  a_fric = mu N f/|f|    (kinetic friction), and at
+//                        the end of the step the anchor follows so that
+//                        omega^2 |d_t| = mu N (wall_anchor_update).
 //
-// with v_t the velocity of a relative to the wall, tangential to the push's
-// direction sum_b (f_ab·n_b) n_b. For |v_t| above the stick speed
-// v_s = mu N / k_max this is exactly Coulomb's kinetic friction, mu N
-// against the sliding direction; below it the friction is viscous with
-// rate k_max (a regularised Coulomb law, the usual way to write static
-// friction in an explicit scheme: e.g. Oden & Martins 1985, Comput. Methods
-// Appl. Mech. Eng. 52:527). The driver takes k_max = c_a / hM_a
+// A particle at rest on a wall below the friction angle therefore holds
+// (it moves by the spring's stretch mu N / omega^2 and no further), and
+// one that slides meets exactly mu N against its sliding (the damping adds
+// to the spring's pull along -v_t). The driver takes omega = c_a / hM_a
 // (sound speed over Monaghan's smoothing length): the Courant limit
-// dt <= C hM / c then keeps k_max dt <= C < 1, so the viscous branch can
-// never reverse the sliding within a step, and v_s = mu N hM / c vanishes
-// with resolution. The friction's work goes into a's internal energy
-// (k |v_t|^2 >= 0 per unit mass), so a run against a wall at rest keeps its
-// total energy.
+// dt <= C hM / c keeps omega dt <= C, well inside the explicit schemes'
+// stability for the spring (omega dt < 2) and its damping (2 omega dt < 2),
+// and the stretch mu N hM^2 / c^2 is far below a particle spacing (a
+// column of 25 particles at rest: ~1e-3 dx). Off the walls (no push) the
+// anchor is the particle's position. The damping's and the slip's work go
+// into a's internal energy.
 #include "rubble/core/hd.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/core/vec.hpp"
@@ -61,13 +69,16 @@ template <int D>
 struct WallReaction {
   Vec<D> dvdt = Vec<D>::zero();  // the wall's push plus its friction [m/s^2]
   Real dudt = 0;                 // the friction's heating [J/kg/s], >= 0
+  Vec<D> grip = Vec<D>::zero();  // mu N along the push's direction; 0 without push
 };
 
 // What the sliding walls do to a particle moving with velocity va, from its
-// contact sums w, with the viscous rate k_max of the stick regime (> 0):
-// nothing unless they push; then the push and the Coulomb friction.
+// contact sums w, its spring's stretch d = x_a - anchor_a and the spring's
+// frequency omega (> 0): nothing unless they push; then the push and the
+// Coulomb friction (stick or slip).
 template <int D>
-RUBBLE_HD_INLINE WallReaction<D> wall_reaction(const WallContact<D>& w, const Vec<D>& va, Real k_max) {
+RUBBLE_HD_INLINE WallReaction<D> wall_reaction(const WallContact<D>& w, const Vec<D>& va, const Vec<D>& d,
+                                               Real omega) {
   WallReaction<D> out;
   if (!(w.push > Real(0))) return out;  // no contact, or a pull: the wall does not hold on
   out.dvdt = w.normal;
@@ -75,15 +86,38 @@ RUBBLE_HD_INLINE WallReaction<D> wall_reaction(const WallContact<D>& w, const Ve
   const Real len = norm(w.normal);
   if (!(len > Real(0))) return out;
   const Vec<D> n = (Real(1) / len) * w.normal;
+  out.grip = w.mu_push * n;
   const Vec<D> rel = va - (Real(1) / Real(w.count)) * w.velocity;
   const Vec<D> vt = rel - dot(rel, n) * n;
-  const Real speed = norm(vt);
-  if (!(speed > Real(0))) return out;
-  const Real coulomb = w.mu_push / speed;
-  const Real k = coulomb < k_max ? coulomb : k_max;
-  out.dvdt += -k * vt;
-  out.dudt = k * speed * speed;
+  const Vec<D> dt = d - dot(d, n) * n;
+  const Vec<D> trial = -(omega * omega) * dt - (Real(2) * omega) * vt;
+  const Real size = norm(trial);
+  if (size <= w.mu_push) {  // stick
+    out.dvdt += trial;
+    out.dudt = Real(2) * omega * norm2(vt);  // the damping's work (the spring's is stored)
+    return out;
+  }
+  const Vec<D> slip = (w.mu_push / size) * trial;
+  out.dvdt += slip;
+  const Real work = -dot(slip, vt);
+  out.dudt = work > Real(0) ? work : Real(0);
   return out;
+}
+
+// The spring's stretch after a step, from its stretch d = x_a - anchor_a
+// at the step's end, the grip of the step's last evaluation and omega: its
+// tangential part, shortened to mu N / omega^2 where it pulls harder than
+// the friction can hold (the particle slipped); 0 off the walls. The new
+// anchor is x_a minus it.
+template <int D>
+RUBBLE_HD_INLINE Vec<D> wall_anchor_update(const Vec<D>& d, const Vec<D>& grip, Real omega) {
+  const Real mu_n = norm(grip);
+  if (!(mu_n > Real(0))) return Vec<D>::zero();
+  const Vec<D> n = (Real(1) / mu_n) * grip;
+  const Vec<D> dt = d - dot(d, n) * n;
+  const Real cap = mu_n / (omega * omega);
+  const Real stretch = norm(dt);
+  return stretch <= cap ? dt : (cap / stretch) * dt;
 }
 
 }  // namespace rubble
