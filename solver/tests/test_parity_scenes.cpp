@@ -25,3 +25,15 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ParityScenes, ::testing::ValuesIn(rubble::parit
                          [](const ::testing::TestParamInfo<rubble::parity::ParityScene>& i) {
                            return std::string(i.param.name);
                          });
+
+// The Coulomb variant does carry Coulomb walls (its --set keys took effect).
+TEST(ParityScenesCoulomb, TheFloorAndTheBackWallAreCoulomb) {
+  const Scene s = rubble::parity::granular_column_coulomb(1);
+  ASSERT_GE(s.bodies.size(), 3u);
+  for (int b : {1, 2}) {
+    EXPECT_EQ(s.bodies[b].wall_slip, WallSlip::Coulomb) << b;
+    EXPECT_DOUBLE_EQ(s.bodies[b].wall_friction, 0.36) << b;
+  }
+  EXPECT_DOUBLE_EQ(s.bodies[1].wall_normal[1], 1.0);
+  EXPECT_DOUBLE_EQ(s.bodies[2].wall_normal[0], 1.0);
+}

@@ -8,7 +8,8 @@
 // with the viscosity switch), 2-D
 // solids with artificial stress, XSPH and a clamp of evolving boundary
 // particles (the oscillating plate, with either stress update), and 3-D self-gravity by direct
-// summation and by the octree, with damping (a small polytrope) - between
+// summation and by the octree, with damping (a small polytrope), and the 2-D
+// granular column collapse with no-slip and with Coulomb walls - between
 // them every driver. Each runs `steps` steps of exactly dt: dt is below the
 // Courant limit and the output interval (which bounds every step) is dt.
 #include <string>
@@ -79,6 +80,24 @@ inline Scene polytrope_bh(int steps) {
   return load_scene_file(src("verification/polytrope/polytrope_n1.toml"), sets);
 }
 
+// The granular column collapse (Drucker-Prager plasticity, the body force,
+// extrapolated walls, particle shifting) at its scene's n = 25, a few
+// hundred steps into the collapse; dt = 2e-5 s is a quarter of the
+// Courant limit (0.3 hM / c = 8e-5 s with c = 16 m/s).
+inline Scene granular_column(int steps) {
+  return load_scene_file(src("validation/granular_column_collapse/granular_column_collapse.toml"), steps_of(2e-5, steps));
+}
+
+// ... with Coulomb walls (physics/wall_friction.hpp): the sliding walls'
+// push, the stick-slip friction and its end-of-step anchors on both backends.
+inline Scene granular_column_coulomb(int steps) {
+  auto sets = steps_of(2e-5, steps);
+  sets.insert(sets.end(), {"bodies.1.wall_slip=\"coulomb\"", "bodies.1.wall_normal=[0.0, 1.0]",
+                           "bodies.1.wall_friction=0.36", "bodies.2.wall_slip=\"coulomb\"",
+                           "bodies.2.wall_normal=[1.0, 0.0]", "bodies.2.wall_friction=0.36"});
+  return load_scene_file(src("validation/granular_column_collapse/granular_column_collapse.toml"), sets);
+}
+
 struct ParityScene {
   const char* name;  // a test-name-safe identifier
   Scene (*make)(int steps);
@@ -91,7 +110,9 @@ inline const std::vector<ParityScene>& scenes() {
       {"Plate", plate},
       {"PlateStaggered", plate_staggered},
       {"PolytropeDirect", polytrope},
-      {"PolytropeBarnesHut", polytrope_bh}};
+      {"PolytropeBarnesHut", polytrope_bh},
+      {"GranularColumn", granular_column},
+      {"GranularColumnCoulomb", granular_column_coulomb}};
   return s;
 }
 
