@@ -468,9 +468,11 @@ TEST(WallRun, CoulombFloorBrakesASlidingBlockAtMuG) {
   EXPECT_NEAR(decel, mu * g, mu * g * (bounce + 1e-9));
   EXPECT_GT(mT.px / m0.M, 0.5 * v0);  // still sliding
   // the floor holds the block at every output: no particle at or below y = 0
-  for (const auto& ps : snaps)
-    for (std::size_t i = 0; i < ps.n; ++i)
+  for (const auto& ps : snaps) {
+    for (std::size_t i = 0; i < ps.n; ++i) {
       if (!ps.boundary[i]) EXPECT_GT(ps.x[i][1], 0.0);
+    }
+  }
 }
 
 // On an incline (gravity tilted by theta). Above the friction angle
