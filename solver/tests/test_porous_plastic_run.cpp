@@ -470,7 +470,9 @@ TEST(WallRun, CoulombFloorBrakesASlidingBlockAtMuG) {
   // the floor holds the block at every output: no particle at or below y = 0
   for (const auto& ps : snaps) {
     for (std::size_t i = 0; i < ps.n; ++i) {
-      if (!ps.boundary[i]) EXPECT_GT(ps.x[i][1], 0.0);
+      if (!ps.boundary[i]) {
+        EXPECT_GT(ps.x[i][1], 0.0);
+      }
     }
   }
 }
