@@ -80,6 +80,7 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.inelastic_volume = true;  // eps_v (a snapshot field)
   needs.damage = true;  // damage_root, the flaws and flaws_active (snapshot fields)
   needs.viscosity_switch = true;  // av_alpha (a snapshot field) and dav_alpha_dt
+  needs.free_slip = needs.wall_friction = true;  // wall_anchor (a snapshot field), the wall fields
   ps.allocate(n, needs);
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < D; ++k) {
@@ -104,6 +105,7 @@ ParticleStore<D> make_store(std::size_t n) {
     ps.flaw_eps_max[i] = Real(2e-4) / Real(1 + i);
     ps.flaws_active[i] = Real(i % 4);
     ps.av_alpha[i] = Real(0.1) + Real(0.07) * Real(i);
+    for (int k = 0; k < D; ++k) ps.wall_anchor[i][k] = ps.x[i][k] - Real(1e-7) * Real(i + k);
   }
   return ps;
 }
@@ -267,6 +269,7 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.flaw_eps_max.clear();
   ps.flaws_active.clear();
   ps.av_alpha.clear();  // no viscosity switch
+  ps.wall_anchor.clear();  // no Coulomb walls
   write_snapshot(path, ps, make_meta());
 
   ParticleStore<D> back;
