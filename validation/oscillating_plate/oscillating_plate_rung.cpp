@@ -80,28 +80,13 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--report-only") a.report_only = true;
-    else if (k == "--keep") a.keep = true;
-    else if (k == "--v0") a.v0 = std::stod(next());
-    else if (k == "--finest-tolerance") a.finest_tolerance = std::stod(next());
-    else if (k == "--t-inf-tolerance") a.t_inf_tolerance = std::stod(next());
-    else if (k == "--resolutions") {
-      std::stringstream ss(next());
-      std::string item;
-      while (std::getline(ss, item, ',')) a.resolutions.push_back(std::stod(item));
-    } else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
+          r.value("--label", a.label) || r.append("--set", a.sets) || r.flag("--report-only", a.report_only) ||
+          r.flag("--keep", a.keep) || r.value("--v0", a.v0) || r.value("--finest-tolerance", a.finest_tolerance) ||
+          r.value("--t-inf-tolerance", a.t_inf_tolerance) || r.list("--resolutions", a.resolutions)))
+      r.unknown();
   if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
   rubble::verification::require_increasing_whole(a.resolutions, 1, "particles through the thickness");
   if (!(a.v0 > 0)) throw std::runtime_error("--v0 must be > 0");

@@ -52,6 +52,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/args.hpp"
 #include "../common/record.hpp"
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
@@ -76,48 +77,29 @@ struct Args {
   bool checks = false, report_only = false;
 };
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
-  return out;
-}
-
 Args parse_args(int argc, char** argv) {
   if (argc < 2) throw std::runtime_error("usage: bh_rung accuracy|timing|scatter [options]");
   Args a;
   a.mode = argv[1];
   if (a.mode != "accuracy" && a.mode != "timing" && a.mode != "scatter")
     throw std::runtime_error("first argument must be accuracy, timing or scatter");
-  for (int i = 2; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--case") a.dist = next();
-    else if (k == "--n") a.n = std::size_t(std::stod(next()));
-    else if (k == "--thetas") a.thetas = parse_list(next());
-    else if (k == "--sizes") a.sizes = parse_list(next());
-    else if (k == "--orders") {
-      a.orders.clear();
-      std::stringstream ss(next());
-      std::string item;
-      while (std::getline(ss, item, ',')) {
-        if (item == "monopole") a.orders.push_back(MultipoleOrder::Monopole);
-        else if (item == "quadrupole") a.orders.push_back(MultipoleOrder::Quadrupole);
-        else throw std::runtime_error("--orders: unknown order " + item);
-      }
+  double n = double(a.n);
+  std::vector<std::string> orders;
+  rubble::verification::ArgReader r(argc, argv, 2);
+  while (!r.done())
+    if (!(r.value("--case", a.dist) || r.value("--n", n) || r.list("--thetas", a.thetas) ||
+          r.list("--sizes", a.sizes) || r.words("--orders", orders) || r.value("--direct-max", a.direct_max) ||
+          r.value("--seeds", a.seeds) || r.list("--roots", a.roots) || r.value("--records", a.records) ||
+          r.value("--label", a.label) || r.flag("--checks", a.checks) || r.flag("--report-only", a.report_only)))
+      r.unknown();
+  a.n = std::size_t(n);
+  if (!orders.empty()) {
+    a.orders.clear();
+    for (const std::string& item : orders) {
+      if (item == "monopole") a.orders.push_back(MultipoleOrder::Monopole);
+      else if (item == "quadrupole") a.orders.push_back(MultipoleOrder::Quadrupole);
+      else throw std::runtime_error("--orders: unknown order " + item);
     }
-    else if (k == "--direct-max") a.direct_max = std::stod(next());
-    else if (k == "--seeds") a.seeds = std::stoi(next());
-    else if (k == "--roots") a.roots = parse_list(next());
-    else if (k == "--records") a.records = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--checks") a.checks = true;
-    else if (k == "--report-only") a.report_only = true;
-    else throw std::runtime_error("unknown argument " + k);
   }
   if (a.dist != "plummer" && a.dist != "uniform") throw std::runtime_error("--case must be plummer or uniform");
   return a;

@@ -8,6 +8,8 @@
 //     if (!(r.value("--scene", a.scene) || r.list("--resolutions", a.resolutions) ||
 //           r.flag("--checks", a.checks) || r.append("--set", a.sets)))
 //       r.unknown();
+//
+// Every rung reads its arguments this way.
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -34,7 +36,8 @@ inline void require_increasing_whole(const std::vector<double>& v, double min, c
 
 class ArgReader {
  public:
-  ArgReader(int argc, char** argv) : argc_(argc), argv_(argv) {}
+  // first: the index of the first option (2 after a leading positional word)
+  ArgReader(int argc, char** argv, int first = 1) : argc_(argc), argv_(argv), i_(first) {}
   bool done() const { return i_ >= argc_; }
 
   // Each of these consumes the current argument (and its value) when it is
@@ -70,6 +73,14 @@ class ArgReader {
     out = parse_number_list(take_value());
     return true;
   }
+  // "a,b,c" -> {"a", "b", "c"}
+  bool words(const char* name, std::vector<std::string>& out) {
+    if (!is(name)) return false;
+    out.clear();
+    std::stringstream ss(take_value());
+    for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+    return true;
+  }
   [[noreturn]] void unknown() const { throw std::runtime_error("unknown argument " + std::string(argv_[i_])); }
 
  private:
@@ -82,7 +93,7 @@ class ArgReader {
   }
   int argc_;
   char** argv_;
-  int i_ = 1;
+  int i_;
 };
 
 }  // namespace rubble::verification

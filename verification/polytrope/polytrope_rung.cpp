@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/args.hpp"
 #include "../common/conserved_csv.hpp"
 #include "../common/record.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -46,20 +47,11 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--dynamical-times") a.dynamical_times = std::stod(next());
-    else if (k == "--checks") a.checks = true;
-    else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
+          r.append("--set", a.sets) || r.value("--dynamical-times", a.dynamical_times) || r.flag("--checks", a.checks)))
+      r.unknown();
   if (a.scene.empty()) throw std::runtime_error("need --scene");
   return a;
 }

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/args.hpp"
 #include "../common/record.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/reference/exact_riemann.hpp"
@@ -43,25 +44,12 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--case") a.sod_case = next();
-    else if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--checks") a.checks = true;
-    else if (k == "--report-only") a.report_only = true;
-    else if (k == "--resolutions") {
-      std::stringstream ss(next());
-      std::string item;
-      while (std::getline(ss, item, ',')) a.resolutions.push_back(std::stod(item));
-    } else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--case", a.sod_case) || r.value("--scene", a.scene) || r.value("--records", a.records) ||
+          r.value("--label", a.label) || r.append("--set", a.sets) || r.flag("--checks", a.checks) ||
+          r.flag("--report-only", a.report_only) || r.list("--resolutions", a.resolutions)))
+      r.unknown();
   if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
   if (a.label.empty()) a.label = "sod_" + a.sod_case;
   return a;

@@ -42,6 +42,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/args.hpp"
 #include "../common/record.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/physics/eos/eos.hpp"
@@ -161,18 +162,9 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--records") a.records = next();
-    else if (k == "--materials") {
-      std::stringstream ss(next());
-      for (std::string item; std::getline(ss, item, ',');) a.materials.push_back(item);
-    } else throw std::runtime_error("unknown argument " + k);
-  }
+  rubble::verification::ArgReader r(argc, argv);
+  while (!r.done())
+    if (!(r.value("--records", a.records) || r.words("--materials", a.materials))) r.unknown();
   return a;
 }
 
