@@ -43,6 +43,7 @@ void expect_fields_agree(const FinalState& c, const FinalState& g, double tol, c
   const std::vector<std::pair<std::string, std::pair<const std::vector<double>*, const std::vector<double>*>>> fields =
       {{"x", {&c.x, &g.x}},   {"v", {&c.v, &g.v}},   {"m", {&c.m, &g.m}},   {"rho", {&c.rho, &g.rho}},
        {"p", {&c.p, &g.p}},   {"u", {&c.u, &g.u}},   {"h", {&c.h, &g.h}},   {"cs", {&c.cs, &g.cs}}};
+  std::string figures;  // the parity figures docs/gpu.md records
   for (const auto& [name, pair] : fields) {
     const std::vector<double>& a = *pair.first;
     const std::vector<double>& b = *pair.second;
@@ -52,7 +53,11 @@ void expect_fields_agree(const FinalState& c, const FinalState& g, double tol, c
     for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::fabs(a[i] - b[i]));
     if (scale == 0) EXPECT_EQ(worst, 0.0) << what << " " << name;
     else EXPECT_LE(worst / scale, tol) << what << ": field " << name << " differs by " << worst << " (scale " << scale << ")";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " %s %.1e", name.c_str(), scale == 0 ? worst : worst / scale);
+    figures += buf;
   }
+  std::printf("%s, one step, largest difference / field scale (bound %.0e):%s\n", what.c_str(), tol, figures.c_str());
 }
 
 struct Totals {
@@ -85,6 +90,12 @@ void expect_conserved_agree(const FinalState& c, const FinalState& g, double tol
   const double e = a.kinetic + a.internal;
   EXPECT_LE(std::fabs(a.kinetic - b.kinetic), tol * e) << what << " kinetic";
   EXPECT_LE(std::fabs(a.internal - b.internal), tol * e) << what << " internal";
+  double dp = 0;
+  for (int k = 0; k < 3; ++k) dp = std::max(dp, std::fabs(a.momentum[k] - b.momentum[k]));
+  std::printf("%s, %lld steps, difference / scale (bound %.0e): mass %.1e momentum %.1e kinetic %.1e internal %.1e\n",
+              what.c_str(), static_cast<long long>(c.steps), tol, std::fabs(a.mass - b.mass) / a.mass,
+              dp / std::max(a.momentum_scale, 1e-300), std::fabs(a.kinetic - b.kinetic) / e,
+              std::fabs(a.internal - b.internal) / e);
 }
 
 }  // namespace
