@@ -665,6 +665,28 @@ TEST_F(eos_library, RubberIsTheLinearMurnaghanOfTheRings) {
   EXPECT_NEAR(eos_evaluate(e, 1.01, 0).p, 0.01, 1e-15);
 }
 
+TEST_F(eos_library, NylonIsSpheralsTillotsonEntryInSI) {
+  // Spheral's MaterialPropertiesLib.py "nylon" (cgs) converted to SI: 1 dyn/cm^2 = 0.1 Pa,
+  // 1 erg/g = 1e-4 J/kg, 1 g/cm^3 = 1000 kg/m^3; mu and Y from its Nakamura test in
+  // g/(cm us^2) = 1e11 Pa (reference_data/materials/nylon.toml gives the provenance)
+  const MaterialConfig m = load_material("nylon");
+  ASSERT_EQ(m.eos, EosType::Tillotson);
+  const TillotsonConfig& c = m.tillotson;
+  EXPECT_DOUBLE_EQ(c.rho0, 1.185 * 1000);
+  EXPECT_DOUBLE_EQ(c.A, 1.01e11 * 0.1);
+  EXPECT_DOUBLE_EQ(c.B, 3.38e11 * 0.1);
+  EXPECT_DOUBLE_EQ(c.E0, 7.00e10 * 1e-4);
+  EXPECT_DOUBLE_EQ(c.E_iv, 2.00e10 * 1e-4);
+  EXPECT_DOUBLE_EQ(c.E_cv, 2.40e10 * 1e-4);
+  EXPECT_EQ(c.a, 0.6);
+  EXPECT_EQ(c.b, 2.0);
+  EXPECT_EQ(c.alpha, 10.0);
+  EXPECT_EQ(c.beta, 5.0);
+  EXPECT_DOUBLE_EQ(m.shear_modulus, 7.3e-4 * 1e11);
+  EXPECT_DOUBLE_EQ(m.plasticity.yield_stress, 1e-4 * 1e11);
+  EXPECT_EQ(m.units, "SI");
+}
+
 TEST_F(eos_library, OverridesApplyBeforeValidation) {
   const MaterialConfig m = load_material("basalt", {"tillotson.A=3e10", "rho_limit=0.9", "p_min=0", "cs_min=100"});
   EXPECT_EQ(m.tillotson.A, 3e10);
