@@ -667,8 +667,8 @@ TEST_F(eos_library, RubberIsTheLinearMurnaghanOfTheRings) {
 
 TEST_F(eos_library, NylonIsSpheralsTillotsonEntryInSI) {
   // Spheral's MaterialPropertiesLib.py "nylon" (cgs) converted to SI: 1 dyn/cm^2 = 0.1 Pa,
-  // 1 erg/g = 1e-4 J/kg, 1 g/cm^3 = 1000 kg/m^3; mu and Y from its Nakamura test in
-  // g/(cm us^2) = 1e11 Pa (reference_data/materials/nylon.toml gives the provenance)
+  // 1 erg/g = 1e-4 J/kg, 1 g/cm^3 = 1000 kg/m^3
+  // (reference_data/materials/nylon.toml gives the provenance)
   const MaterialConfig m = load_material("nylon");
   ASSERT_EQ(m.eos, EosType::Tillotson);
   const TillotsonConfig& c = m.tillotson;
@@ -682,8 +682,7 @@ TEST_F(eos_library, NylonIsSpheralsTillotsonEntryInSI) {
   EXPECT_EQ(c.b, 2.0);
   EXPECT_EQ(c.alpha, 10.0);
   EXPECT_EQ(c.beta, 5.0);
-  EXPECT_DOUBLE_EQ(m.shear_modulus, 7.3e-4 * 1e11);
-  EXPECT_DOUBLE_EQ(m.plasticity.yield_stress, 1e-4 * 1e11);
+  EXPECT_EQ(m.shear_modulus, 0.0);  // a fluid: the projectile's strength is negligible (the file's comments)
   EXPECT_EQ(m.units, "SI");
 }
 

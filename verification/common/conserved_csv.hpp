@@ -1,6 +1,7 @@
 #pragma once
 // Reading a run's conserved.csv (solver/include/rubble/io/conserved_log.hpp
-// writes it) back in a rung: the time and the energy columns, found by name.
+// writes it) back in a rung: the time, energy and momentum columns, found by
+// name.
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -12,6 +13,7 @@ namespace rubble::verification {
 
 struct ConservedRow {
   double t, kinetic, internal, gravitational, total;
+  double momentum[3];  // the components the run's dimension has; 0 for the others
 };
 
 inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
@@ -32,6 +34,12 @@ inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
   };
   const std::size_t ct = col("time"), ck = col("kinetic"), ci = col("internal"), cg = col("gravitational"),
                     ce = col("total");
+  const char* momentum_names[3] = {"momentum_x", "momentum_y", "momentum_z"};
+  std::size_t cp[3];
+  for (int k = 0; k < 3; ++k) {
+    const auto it = std::find(cols.begin(), cols.end(), momentum_names[k]);
+    cp[k] = it == cols.end() ? cols.size() : std::size_t(it - cols.begin());  // cols.size(): not written
+  }
   std::vector<ConservedRow> rows;
   while (std::getline(f, line)) {
     std::vector<double> v;
@@ -40,7 +48,9 @@ inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
     while (std::getline(ss, c, ',')) v.push_back(std::stod(c));
     if (v.size() != cols.size()) throw std::runtime_error(path + ": a row with " + std::to_string(v.size()) +
                                                           " values under " + std::to_string(cols.size()) + " columns");
-    rows.push_back({v[ct], v[ck], v[ci], v[cg], v[ce]});
+    rows.push_back({v[ct], v[ck], v[ci], v[cg], v[ce],
+                    {cp[0] < v.size() ? v[cp[0]] : 0.0, cp[1] < v.size() ? v[cp[1]] : 0.0,
+                     cp[2] < v.size() ? v[cp[2]] : 0.0}});
   }
   return rows;
 }
