@@ -19,7 +19,7 @@
 // runs the scene through rubble::run_scene, and reads every snapshot.
 //
 // Measured: the target's damage at every output (mean D, fraction with
-// D >= 0.99), a slice |z| < dx/2 through the impact plane at every output
+// D >= 0.99), a slice |z| < 3 dx/4 (the two lattice layers beside z = 0) at every output
 // of the finest run (the damage pattern), the total momentum and energy from
 // conserved.csv, and the fragments of the final snapshot: ci/fragments
 // (friends-of-friends over particles with D < 1, linking length 1.5 spacings;
@@ -208,7 +208,7 @@ Result run_one(const Args& a, double n, bool keep_shots) {
         r.D_max = std::max(r.D_max, D);
         mt += ps.m[i];
         ++nt;
-        if (keep_shots && std::fabs(double(ps.x[i][2])) < 0.5 * r.dx) {
+        if (keep_shots && std::fabs(double(ps.x[i][2])) < 0.75 * r.dx) {  // the two lattice layers at z = +-dx/2
           shot.x.push_back(ps.x[i][0]);
           shot.y.push_back(ps.x[i][1]);
           shot.D.push_back(D);

@@ -1,6 +1,6 @@
 """Extra report plots for the Nakamura impact rung (called by ci/report).
 
-The damage pattern in the impact plane (the slice |z| < dx/2 of the finest
+The damage pattern in the impact plane (the slice |z| < 3 dx/4 of the finest
 resolution) at every output, the target's damage history (mean D and the
 fraction with D >= 0.99) and the cumulative fragment mass distribution
 N(>= M) against M/M_total at every resolution. The experiment's distribution
@@ -45,7 +45,7 @@ def plots(case: str, records: list, out_dir: Path) -> list:
             ax.set_ylabel("y [cm]", fontsize=8)
         if sc is not None:
             fig.colorbar(sc, ax=axes, shrink=0.8, label="damage D")
-        fig.suptitle(f"target damage in the impact plane (|z| < dx/2), n = {shots_rec['resolution']:g}", fontsize=10)
+        fig.suptitle(f"target damage in the impact plane (|z| < 3 dx/4), n = {shots_rec['resolution']:g}", fontsize=10)
         name = f"nakamura_impact-{_slug(case)}-damage.png"
         fig.savefig(out_dir / name, dpi=110)
         plt.close(fig)
