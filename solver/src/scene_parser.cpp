@@ -775,7 +775,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   return m;
 }
 
-// porosity = { model = "p_alpha", alpha0, p_e, p_s, crush_curve, [p_t, alpha_t, n1, n2], c_e, c_s0 }
+// porosity = { model = "p_alpha", alpha0, p_e, p_s, crush_curve, [p_t, alpha_t, n1, n2], [c_e, c_s0] }
 // (issue #11; Jutzi, Benz & Michel 2008; Jutzi et al. 2009; docs/scene.md).
 void SceneReader::read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m) {
   PorosityConfig& c = m.porosity;
@@ -797,11 +797,16 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
   require(c.p_e >= 0, q, "p_e", qp, c.p_e, ">= 0");
   c.p_s = required_number(q, "p_s", qp, "the full-compaction pressure [Pa]");
   require(c.p_s > c.p_e, q, "p_s", qp, c.p_s, "> p_e = " + fmt(c.p_e) + " (the crush curve runs from p_e to p_s)");
-  c.c_s0 = required_number(q, "c_s0", qp, "the matrix sound speed [m/s]");
-  require(c.c_s0 > 0, q, "c_s0", qp, c.c_s0, "> 0");
-  c.c_e = required_number(q, "c_e", qp, "the porous elastic sound speed [m/s]");
-  require(c.c_e > 0 && c.c_e < c.c_s0, q, "c_e", qp, c.c_e,
-          "> 0 and < c_s0 = " + fmt(c.c_s0) + " (porous material is elastically softer than its matrix)");
+  // The elastic branch (J08 §3.2) needs both sound speeds; a material that
+  // gives neither has none: alpha stays alpha0 until p exceeds p_e.
+  if (q.contains("c_e") || q.contains("c_s0")) {
+    c.c_s0 = required_number(q, "c_s0", qp, "the matrix sound speed [m/s] (c_e is given: the elastic branch needs both)");
+    require(c.c_s0 > 0, q, "c_s0", qp, c.c_s0, "> 0");
+    c.c_e = required_number(q, "c_e", qp,
+                            "the porous elastic sound speed [m/s] (c_s0 is given: the elastic branch needs both)");
+    require(c.c_e > 0 && c.c_e < c.c_s0, q, "c_e", qp, c.c_e,
+            "> 0 and < c_s0 = " + fmt(c.c_s0) + " (porous material is elastically softer than its matrix)");
+  }
   if (c.crush_curve == CrushCurveType::Steep) {
     c.p_t = required_number(q, "p_t", qp, "the steep curve's transition pressure [Pa]");
     require(c.p_t > c.p_e && c.p_t < c.p_s, q, "p_t", qp, c.p_t, "between p_e and p_s");

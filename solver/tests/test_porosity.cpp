@@ -470,6 +470,37 @@ TEST(porosity_rate, never_positive) {
   EXPECT_GT(negative, 10);  // the grid does reach compacting states
 }
 
+// Without c_e and c_s0 (a material that gives neither: docs/scene.md) there is
+// no elastic branch: a virgin state keeps α = α_e in compression up to p_e, and
+// above p_e the rate is the crush curve's chain rule, as with the branch on.
+TEST(porosity_rate, without_elastic_branch_alpha_holds_until_p_e) {
+  const EosParams m = tillotson(kBasalt);
+  PorosityParams pp = pumice();
+  pp.c_e = 0;
+  pp.c_s0 = 0;
+  ASSERT_FALSE(porosity_elastic_enabled(m, pp));
+  EXPECT_EQ(porosity_sound_speed_ratio(pp, 2.0), 1.0);
+  const double rho0b = kBasalt.rho0 / pp.alpha_e;
+  int below = 0;
+  for (double strain : {1e-6, 1e-5, 1e-4}) {
+    const double rho = rho0b * (1 + strain);
+    const double p = porous_p(m, pp, rho, 0.0, pp.alpha_e);
+    if (!(p > 0 && p < pp.p_e)) continue;
+    ++below;
+    EXPECT_EQ(porosity_branch(m, pp, p, pp.alpha_e), PorosityBranch::None);
+    EXPECT_EQ(porosity_dalpha_dt(m, pp, rho, 0.0, pp.alpha_e, 1.0, 0.0), 0.0);
+    EXPECT_EQ(porous_alpha_on_loading_curve(m, pp, rho, 0.0, pp.alpha_e), pp.alpha_e);
+  }
+  EXPECT_GE(below, 2);
+  // above p_e the same plastic states as with the branch on
+  const std::vector<State> states = plastic_states(m, pp, 0.0);
+  EXPECT_GT(states.size(), 20u);
+  for (const State& s : states) {
+    EXPECT_EQ(porosity_branch(m, pp, s.p, s.alpha), PorosityBranch::Plastic);
+    expect_rate_matches_curve_fd(m, pp, s);
+  }
+}
+
 TEST(porosity_rate, return_to_the_loading_curve) {
   const EosParams m = tillotson(kAluminium);
   const PorosityParams pp = porous_aluminium();

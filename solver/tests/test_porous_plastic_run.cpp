@@ -138,10 +138,37 @@ TEST(PorosityScene, KeysAreReadWithDefaults) {
   EXPECT_EQ(t.materials[0].porosity.crush_curve, CrushCurveType::Steep);
   EXPECT_EQ(t.materials[0].porosity.n1, 12.0);
   // the library's porous materials load and validate
-  for (const char* name : {"porous_aluminium", "porous_basalt"}) {
+  for (const char* name : {"porous_aluminium", "porous_basalt", "pumice"}) {
     const MaterialConfig m = load_material(name);
     EXPECT_TRUE(m.porosity.enabled) << name;
   }
+}
+
+// c_e and c_s0 come as a pair: without both the material has no elastic
+// branch (docs/scene.md); the parsed pair is (0, 0), which the physics reads as
+// "elastic branch off" (porosity_elastic_enabled).
+TEST(PorosityScene, ElasticBranchIsOptionalAsAPair) {
+  const Scene s =
+      parse_scene(porous_rod("porosity = { model = \"p_alpha\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8 }"), "t.toml");
+  const PorosityConfig& p = s.materials[0].porosity;
+  EXPECT_TRUE(p.enabled);
+  EXPECT_EQ(p.c_e, 0.0);
+  EXPECT_EQ(p.c_s0, 0.0);
+  // the library's pumice has no elastic branch (no sound speed of J09's pumice was found: the file says so)
+  const MaterialConfig pumice = load_material("pumice");
+  EXPECT_EQ(pumice.porosity.c_e, 0.0);
+  EXPECT_EQ(pumice.porosity.c_s0, 0.0);
+  // J09's pumice curve as PHYSICS.md section 4 prints it; the matrix is Spheral's 'pumice' in SI
+  EXPECT_EQ(pumice.porosity.crush_curve, CrushCurveType::Steep);
+  EXPECT_EQ(pumice.porosity.alpha0, 4.64);
+  EXPECT_EQ(pumice.porosity.alpha_t, 1.90);
+  EXPECT_EQ(pumice.porosity.p_e, 1e6);
+  EXPECT_EQ(pumice.porosity.p_t, 6.8e7);
+  EXPECT_EQ(pumice.porosity.p_s, 2.13e8);
+  EXPECT_EQ(pumice.porosity.n1, 12.0);
+  EXPECT_EQ(pumice.porosity.n2, 3.0);
+  EXPECT_EQ(pumice.tillotson.rho0, 2327.0);
+  EXPECT_EQ(pumice.tillotson.A, 2.67e10);
 }
 
 TEST(PorosityScene, BadValuesNameTheKey) {
@@ -157,6 +184,8 @@ TEST(PorosityScene, BadValuesNameTheKey) {
       {base + "alpha0 = 1.275, p_e = -1.0, p_s = 7e8" + tail, "materials.al.porosity.p_e"},
       {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, c_e = 6000.0, c_s0 = 5350.0 }", "materials.al.porosity.c_e"},
       {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, c_e = 4110.0 }", "materials.al.porosity.c_s0"},
+      {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, c_s0 = 5350.0 }", "materials.al.porosity.c_e"},
+      {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, c_e = 0.0, c_s0 = 5350.0 }", "materials.al.porosity.c_e"},
       {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, p_t = 1e8" + tail, "materials.al.porosity.p_t"},  // quadratic
       {base + "crush_curve = \"steep\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8" + tail, "materials.al.porosity.p_t"},
       {base + "crush_curve = \"cubic\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8" + tail,

@@ -135,8 +135,8 @@ struct PorosityConfig {
   double p_t = 0;      // [Pa] steep curve: transition pressure (p_e < p_t < p_s)
   double alpha_t = 1;  // steep curve: distention at p_t (1 < alpha_t < alpha0)
   double n1 = 0, n2 = 0;  // steep curve exponents (> 0)
-  double c_e = 0;      // [m/s] porous elastic sound speed (> 0, < c_s0)
-  double c_s0 = 0;     // [m/s] matrix sound speed (> c_e)
+  double c_e = 0;      // [m/s] porous elastic sound speed (> 0, < c_s0); 0 with c_s0 = 0: no elastic branch
+  double c_s0 = 0;     // [m/s] matrix sound speed (> c_e); 0 with c_e = 0: no elastic branch
 };
 
 // Plasticity of a solid (shear_modulus > 0): von Mises or Drucker-Prager
