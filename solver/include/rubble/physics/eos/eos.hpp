@@ -10,7 +10,9 @@
 //   1. tension cut-off (EosLimits::rho_limit > 0; Murnaghan and Tillotson):
 //      for η = ρ/ρ0 < rho_limit, Murnaghan p = 0; Tillotson drops the cold
 //      (compressed-formula) share, p = w_e p_e (0 in cold states, p_e
-//      unchanged in hot ones). c² is not changed.
+//      unchanged in hot ones) and takes that pressure's c² (0 in cold
+//      states, before the floor: tillotson_hot_share). Murnaghan's c² is not
+//      changed (finite: K0/ρ0 η^(n−1)).
 //   2. minimum pressure (p_min_enabled): p = max(p, p_min).
 //   3. Tillotson sound-speed floor, on by default (material key cs_floor):
 //      c² = max(c², A/ρ0), the
@@ -116,7 +118,9 @@ RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
     } else if (e.kind == EosKind::Tillotson && rho < l.rho_limit * e.tillotson.rho0) {
       const TillotsonState t = tillotson_evaluate(e.tillotson, rho, u);
       if (t.p_cold != Real(0)) s.limited |= kEosTensionCutOff;
-      s.p = t.p_hot;
+      const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
+      s.p = hot.p;  // = t.p_hot
+      s.c2 = hot.dpdrho + hot.p / (rho * rho) * hot.dpdu;  // the sound speed of the pressure left
     }
   }
   // 2. minimum pressure

@@ -100,22 +100,9 @@ RUBBLE_HD_INLINE EosDerivatives eos_pressure_derivatives_limited(const EosParams
   if (l.rho_limit > Real(0)) {
     if (e.kind == EosKind::Murnaghan && rho < l.rho_limit * e.murnaghan.rho0) return EosDerivatives{Real(0), Real(0)};
     if (e.kind == EosKind::Tillotson && rho < l.rho_limit * e.tillotson.rho0) {
-      const TillotsonParams& t = e.tillotson;
       // rho_limit < 1 in practice, so the state is expanded: p = w_e p_e
-      switch (tillotson_regime(t, rho, u)) {
-        case TillotsonRegime::ExpandedHot: {
-          const TillotsonBranch x = tillotson_expanded(t, rho, u);
-          return EosDerivatives{x.dpdrho, x.dpdu};
-        }
-        case TillotsonRegime::PartialVaporisation: {
-          const TillotsonBranch x = tillotson_expanded(t, rho, u);
-          const Real width = t.E_cv - t.E_iv;
-          const Real we = (u - t.E_iv) / width;
-          return EosDerivatives{we * x.dpdrho, we * x.dpdu + x.p / width};
-        }
-        default:
-          return EosDerivatives{Real(0), Real(0)};  // cold: the cut-off leaves p = 0
-      }
+      const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
+      return EosDerivatives{hot.dpdrho, hot.dpdu};
     }
   }
   return eos_pressure_derivatives(e, rho, u);

@@ -166,6 +166,25 @@ RUBBLE_HD_INLINE TillotsonState tillotson_evaluate(const TillotsonParams& t, Rea
   return s;
 }
 
+// The expanded formula's share of the pressure, p_hot = w_e p_e (0 cold, the
+// blend's share in partial vaporisation, p_e hot; 0 for η ≥ 1), with its
+// partial derivatives: ∂/∂ρ = w_e ∂p_e/∂ρ, ∂/∂u = w_e ∂p_e/∂u + p_e/(E_cv − E_iv)
+// in partial vaporisation. It is the pressure the tension cut-off leaves
+// (eos.hpp), whose sound speed and partials both the EOS and
+// eos_derivatives.hpp take from here.
+RUBBLE_HD_INLINE TillotsonBranch tillotson_hot_share(const TillotsonParams& t, Real rho, Real u) {
+  switch (tillotson_regime(t, rho, u)) {
+    case TillotsonRegime::ExpandedHot: return tillotson_expanded(t, rho, u);
+    case TillotsonRegime::PartialVaporisation: {
+      const TillotsonBranch x = tillotson_expanded(t, rho, u);
+      const Real width = t.E_cv - t.E_iv;
+      const Real we = (u - t.E_iv) / width;
+      return TillotsonBranch{we * x.p, we * x.dpdrho, we * x.dpdu + x.p / width};
+    }
+    default: return TillotsonBranch{Real(0), Real(0), Real(0)};
+  }
+}
+
 // Host helper: the regime's name as `rubble eos` prints it.
 inline const char* tillotson_regime_name(TillotsonRegime r) {
   switch (r) {
