@@ -29,3 +29,22 @@ TEST(RungExitStatus, AKnownFailureThatPassesEverywhereIsStale) {
   // an entry that matches no check at all (a part not run) is not judged
   EXPECT_EQ(rung_exit_status({check("a", 0.5)}, {"clumping"}), 0);
 }
+
+// Every record names the run that made it (write_record appends it).
+TEST(RecordMetadata, WithAppendsKeysToAnObject) {
+  using rubble::verification::Json;
+  EXPECT_EQ(Json::object({{"a", 1}}).with({{"b", "x"}}).str(), "{\"a\": 1, \"b\": \"x\"}");
+  EXPECT_EQ(Json::object({}).with({{"b", 2}}).str(), "{\"b\": 2}");
+  EXPECT_EQ(Json::object({{"a", 1}}).with({}).str(), "{\"a\": 1}");
+  EXPECT_THROW(Json(1.0).with({{"b", 2}}), std::logic_error);
+}
+
+TEST(RecordMetadata, RunMetadataNamesBackendPrecisionAndCommit) {
+  using rubble::verification::Json;
+  const std::string s = Json::object(rubble::verification::run_metadata("cuda")).str();
+  EXPECT_NE(s.find("\"backend\": \"cuda\""), std::string::npos) << s;
+  EXPECT_NE(s.find(sizeof(rubble::Real) == 8 ? "\"precision\": \"double\"" : "\"precision\": \"float\""),
+            std::string::npos)
+      << s;
+  EXPECT_NE(s.find("\"commit\": \""), std::string::npos) << s;
+}

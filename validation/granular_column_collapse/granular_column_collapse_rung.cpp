@@ -657,9 +657,6 @@ int run_column(const Args& args) {
         {"observed_order", finest ? orders : Json::object({})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
-        {"backend", rubble::backend_name(rubble::default_backend())},
-        {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(cj)},
         {"profile", Json::object({{"x", r.px},
                                   {"h", r.ph},
@@ -700,7 +697,7 @@ int run_column(const Args& args) {
         {"snapshots", Json::array(r.shots)},
     });
     rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu",
-                                       record);
+                                       record, rubble::backend_name(rubble::default_backend()));
   }
   (void)ok;
   return args.report_only ? 0 : rubble::verification::rung_exit_status(all_checks, args.known_failures);
@@ -784,9 +781,6 @@ int run_aspect(const Args& args) {
       {"errors", Json::object({{"normalised_runout", Json::object({{"rel_vs_lube_max", max_dev_lube},
                                                                    {"rel_vs_lajeunesse_max", max_dev_laj}})}})},
       {"wall_seconds", wsum},
-      {"backend", rubble::backend_name(rubble::default_backend())},
-      {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-      {"commit", RUBBLE_COMMIT},
       {"checks", Json::array(cj)},
       {"dx", dx},
       {"column_area", area},
@@ -803,7 +797,7 @@ int run_aspect(const Args& args) {
       {"reference_sources", Json::object({{"lube2005", kLubeSource}, {"lajeunesse2005", kLajSource}})},
   });
   rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" +
-                                                       rubble::verification::exact_number(args.resolution) + "-cpu", record);
+                                                       rubble::verification::exact_number(args.resolution) + "-cpu", record, rubble::backend_name(rubble::default_backend()));
   (void)ok;
   return args.report_only ? 0 : rubble::verification::rung_exit_status(all_checks, args.known_failures);
 }

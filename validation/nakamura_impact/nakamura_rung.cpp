@@ -321,9 +321,6 @@ int main(int argc, char** argv) try {
                                  {"energy", Json::object({{"rel", std::fabs(r.energy_change)}})}})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
-        {"backend", rubble::backend_name(rubble::default_backend())},
-        {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(cj)},
         {"dx", r.dx},
         {"projectile", Json::object({{"spacing", r.s_proj}, {"particles", r.proj_particles}, {"mass", r.proj_mass}})},
@@ -337,7 +334,7 @@ int main(int argc, char** argv) try {
         {"snapshots", finest ? Json::array(shots) : Json::array(std::vector<Json>{})},
     });
     rubble::verification::write_record(a.records, "nakamura_impact-" + a.label + "-" + exact_number(r.n) + "-cpu",
-                                       record);
+                                       record, rubble::backend_name(rubble::default_backend()));
   }
   return rubble::verification::rung_exit_status(all_checks, a.known_failures);
 } catch (const std::exception& e) {

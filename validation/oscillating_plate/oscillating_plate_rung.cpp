@@ -414,9 +414,6 @@ int run(const Args& args) {
         {"errors", Json::object({{"period", Json::object({{"rel", r.error}})}})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
-        {"backend", rubble::backend_name(rubble::default_backend())},
-        {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(cj)},
         {"dx", r.dx},
         {"period", Json::object({{"measured", r.period},
@@ -438,7 +435,7 @@ int run(const Args& args) {
         {"energy_history", Json::object({{"t", r.et}, {"kinetic", r.ekin}, {"internal", r.eint}, {"total", r.etot}})},
         {"shapes", keep_shapes ? Json::array(r.shapes) : Json::array({})},
     });
-    rubble::verification::write_record(args.records, "oscillating_plate-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu", record);
+    rubble::verification::write_record(args.records, "oscillating_plate-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu", record, rubble::backend_name(rubble::default_backend()));
     prev = &r;
   }
   return args.report_only ? 0 : rubble::verification::rung_exit_status(all, args.known_failures);

@@ -400,13 +400,10 @@ int main(int argc, char** argv) try {
                                        {"probes", double(m.probes)}, {"iterations", double(m.iterations)},
                                        {"t_inf_error", e_inf}, {"t_inf_a", a_coef}})},
             {"wall_seconds", m.seconds},
-            {"backend", "cpu"},
-            {"precision", sizeof(Real) == 8 ? "double" : "float"},
-            {"commit", RUBBLE_COMMIT},
             {"checks", check_json},
         });
         rubble::verification::write_record(a.records, "oscillating_plate-" + label + "-" + g(a.resolutions[i]),
-                                           record);
+                                           record, "cpu");
       }
     }
   return rubble::verification::rung_exit_status(all, a.known_failures);

@@ -236,9 +236,6 @@ int run(const Args& args) {
       {"errors", Json::object({{"energy", Json::object({{"rel", drift}})},
                                {"momentum", Json::object({{"rel", momentum_ratio}})}})},
       {"wall_seconds", fs.wall_seconds},
-      {"backend", rubble::backend_name(rubble::default_backend())},
-      {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-      {"commit", RUBBLE_COMMIT},
       {"checks", checks_json},
       {"energy_history", Json::object({{"t", et}, {"kinetic", ekin}, {"internal", eint}, {"total", etot}})},
       {"outputs", Json::object({{"t", ot}, {"vcom_left", vl}, {"vcom_right", vr}, {"min_pair_over_dx", mp},
@@ -246,7 +243,7 @@ int run(const Args& args) {
       {"density_strip", Json::array(strip)},
   });
   std::snprintf(buf, sizeof buf, "%g", 1.0 / dx);
-  rubble::verification::write_record(args.records, "rubber_rings-" + args.label + "-" + buf + "-cpu", record);
+  rubble::verification::write_record(args.records, "rubber_rings-" + args.label + "-" + buf + "-cpu", record, rubble::backend_name(rubble::default_backend()));
   std::filesystem::remove_all(args.out);
   return ok || args.report_only ? 0 : 1;
 }

@@ -220,8 +220,6 @@ std::string num(double v) {
   return b;
 }
 
-std::string precision_name() { return sizeof(Real) == 8 ? "double" : "float"; }
-
 void print_checks(const std::vector<Check>& checks) {
   for (const auto& c : checks)
     std::printf("  [%s] %s = %.4g (%s %.4g; %s)\n", c.passed() ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
@@ -330,15 +328,12 @@ int run_accuracy(const Args& args) {
                                                       {"pair", per_particle_pairs}})},
           {"timing", Json::object({{"tree_build", t_build}, {"tree_walk", t_walk}, {"direct", t_direct}})},
           {"wall_seconds", t_build + t_walk},
-          {"backend", "cpu"},
-          {"precision", precision_name()},
-          {"commit", RUBBLE_COMMIT},
           {"checks", Json::array(cj)},
       });
       char stem[160];
       std::snprintf(stem, sizeof stem, "barnes_hut-%s-%s-theta%.3f-leaf%u-group%u", label.c_str(), order_name(order),
                     theta, setting.leaf_size, setting.group_size);
-      rubble::verification::write_record(args.records, stem, record);
+      rubble::verification::write_record(args.records, stem, record, "cpu");
       std::printf("  %-10s theta %.2f leaf %u group %2u: acc rel err median %.3e  p99 %.3e  max %.3e | phi median "
                   "%.3e p99 %.3e | imbalance %.2e | %.0f multipoles + %.0f pairs per particle | build %.3f s walk "
                   "%.3f s\n",
@@ -457,14 +452,11 @@ int run_timing(const Args& args) {
                                                 {"direct_time_exponent", p_dir}})
                                 : Json::object({})},
         {"wall_seconds", r.build + r.walk},
-        {"backend", "cpu"},
-        {"precision", precision_name()},
-        {"commit", RUBBLE_COMMIT},
         {"checks", last ? Json::array(cj) : Json::array({})},
     });
     char stem[160];
     std::snprintf(stem, sizeof stem, "barnes_hut-%s-n%zu", label.c_str(), r.n);
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, "cpu");
   }
   return (all_passed || args.report_only) ? 0 : 1;
 }
@@ -802,14 +794,11 @@ int run_scatter(const Args& args) {
         {"tail_inner_radius", r_inner},
         {"textbook_max_diff", c.order == MultipoleOrder::Monopole ? Json(c.textbook_max_diff) : Json()},
         {"wall_seconds", wall},
-        {"backend", "cpu"},
-        {"precision", precision_name()},
-        {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(cj)},
     });
     char stem[160];
     std::snprintf(stem, sizeof stem, "barnes_hut-%s-%s-theta%.3f", label.c_str(), order_name(c.order), c.theta);
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, "cpu");
   }
   std::fflush(stdout);
   return (all_passed || args.report_only) ? 0 : 1;

@@ -1,15 +1,19 @@
 #pragma once
 // One JSON record per verification run (format: docs/report-format.md),
 // written by every rung and rendered by ci/report. Header-only, no
-// dependencies: a tiny JSON writer is enough for flat records.
+// dependencies beyond rubble's Real: a tiny JSON writer is enough for flat
+// records.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "rubble/core/real.hpp"
 
 // The commit a record names (set by the build for every target; a build
 // outside git says "unknown").
@@ -63,6 +67,15 @@ class Json {
     return j;
   }
   const std::string& str() const { return text_; }
+  // This object with the keys of `kv` appended.
+  Json with(const std::vector<std::pair<std::string, Json>>& kv) const {
+    Json j = object(kv);
+    if (kv.empty()) return *this;
+    if (text_.size() < 2 || text_.front() != '{' || text_.back() != '}')
+      throw std::logic_error("Json::with on a value that is not an object");
+    j.text_ = text_.substr(0, text_.size() - 1) + (text_ == "{}" ? "" : ", ") + j.text_.substr(1);
+    return j;
+  }
 
  private:
   static std::string quote(const std::string& s) {
@@ -113,10 +126,20 @@ inline Json judge_checks(const std::vector<Check>& checks, bool& all_passed) {
   return Json::array(items);
 }
 
-inline void write_record(const std::filesystem::path& dir, const std::string& file_stem, const Json& record) {
+// What every record says of the run that made it: the backend that computed
+// it ("cpu", "cuda"; "cpu" for host-only computations such as an EOS scan),
+// the precision of rubble::Real, and the commit built.
+inline std::vector<std::pair<std::string, Json>> run_metadata(const std::string& backend) {
+  return {{"backend", backend}, {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"}, {"commit", RUBBLE_COMMIT}};
+}
+
+// Write `record` (an object) with the run's metadata appended, as
+// dir/file_stem.json.
+inline void write_record(const std::filesystem::path& dir, const std::string& file_stem, const Json& record,
+                         const std::string& backend) {
   std::filesystem::create_directories(dir);
   std::ofstream f(dir / (file_stem + ".json"));
-  f << record.str() << "\n";
+  f << record.with(run_metadata(backend)).str() << "\n";
   if (!f) throw std::runtime_error("cannot write record " + (dir / (file_stem + ".json")).string());
 }
 

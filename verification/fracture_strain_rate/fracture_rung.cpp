@@ -287,12 +287,9 @@ int main(int argc, char** argv) try {
                                  {"slope_size", slope_size},
                                  {"theory_size", theory_size}, {"histories", Json::array(series)}})},
       {"wall_seconds", std::accumulate(walls.begin(), walls.end(), 0.0)},
-      {"backend", "cpu"},
-      {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-      {"commit", RUBBLE_COMMIT},
       {"checks", check_json},
   });
-  rubble::verification::write_record(a.records, a.label, record);
+  rubble::verification::write_record(a.records, a.label, record, "cpu");
   return rubble::verification::rung_exit_status(checks, a.known_failures);
 } catch (const std::exception& e) {
   std::fprintf(stderr, "fracture_rung: error: %s\n", e.what());

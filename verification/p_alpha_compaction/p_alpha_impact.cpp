@@ -211,14 +211,11 @@ int main(int argc, char** argv) try {
       {"max_alpha_rise", max_rise},
       {"energy_drift_over_initial_kinetic", drift},
       {"wall_seconds", fs.wall_seconds},
-      {"backend", fs.backend},
-      {"precision", sizeof(Real) == 8 ? "double" : "float"},
-      {"commit", RUBBLE_COMMIT},
       {"checks", checks_json},
       {"impact", Json::object({{"p", sp}, {"alpha", sa}, {"crush_p", cp}, {"crush_alpha", ca},
                                {"map_x", mx}, {"map_y", my}, {"map_alpha", ma}})},
   });
-  rubble::verification::write_record(args.records, "p_alpha_" + args.label, record);
+  rubble::verification::write_record(args.records, "p_alpha_" + args.label, record, fs.backend);
   std::printf("impact %s: N = %zu, %lld steps, %d outputs, t = %.3g s, wall %.1f s; min alpha %.6g, "
               "largest crush-curve excess %.3g, alpha rises %ld, energy drift %.3g of the initial kinetic energy\n",
               args.label.c_str(), fs.m.size(), static_cast<long long>(fs.steps), outputs, last_meta.time,

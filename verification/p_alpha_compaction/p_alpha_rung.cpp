@@ -457,9 +457,6 @@ int run_forced(const Args& args) {
                                       {"reload_max_change", r.reload_change}, {"p_peak1", p_peak1}, {"p_peak2", p_peak2},
                                       {"max_step_fraction", r.max_step_fraction}, {"stalled_k1_steps", r.stalled_k1}})},
         {"wall_seconds", 0.0},
-        {"backend", "cpu"},
-        {"precision", sizeof(Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"units", Json::object({{"x", "Pa"}, {"p", "Pa"}})},
         {"checks", checks_json(checks, all_passed)},
     };
@@ -468,7 +465,7 @@ int run_forced(const Args& args) {
     char stem[160];
     std::snprintf(stem, sizeof stem, "p_alpha_forced_%s%s_%07d", c.name.c_str(), "",
                   static_cast<int>(res[l]));
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, "cpu");
     std::printf("  dt 1/%-6g steps %6d  max|alpha-exact| %.3e  final %.3e  crush dev %.3e (%ld pts)  elastic dev %.3e (%ld)"
                 "  unload dalpha %.3g (%ld)  reload dalpha %.3g (%ld)  max step dalpha/alpha %.3g  k1-stalls %ld\n",
                 res[l], r.steps, r.err_global, r.err_final, r.dev_plastic, r.plastic_points, r.dev_elastic,
@@ -721,9 +718,6 @@ int run_piston(const Args& args) {
                                    {"frame", "speeds relative to the undisturbed material; plateaus in the wall frame"}})},
         {"mirror_asymmetry_p_rel", asym},
         {"wall_seconds", fs.wall_seconds},
-        {"backend", fs.backend},
-        {"precision", sizeof(Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"units", Json::object({{"x", "m"}, {"rho", "kg/m^3"}, {"p", "Pa"}, {"v", "m/s"}, {"u", "J/kg"}})},
         {"checks", checks_json(checks, all_passed)},
         {"profile", Json::object({{"x", px}, {"rho", prho}, {"p", pp}, {"alpha", pa}, {"v", pv}, {"u", pu},
@@ -732,7 +726,7 @@ int run_piston(const Args& args) {
     char stem[160];
     std::snprintf(stem, sizeof stem, "p_alpha_%s_%06d", args.label.empty() ? "piston_1d" : args.label.c_str(),
                   static_cast<int>(N));
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, fs.backend);
     std::printf("piston N %6g  particles %zu  steps %lld  wall %.1f s  t %.4g\n", N, fs.rho.size(),
                 static_cast<long long>(fs.steps), fs.wall_seconds, t);
     std::printf("  fronts: compaction %.5g mm (exact %.5g, |d|/h %.3g)  elastic %.5g mm (exact %.5g, |d|/h %.3g)\n",

@@ -245,9 +245,6 @@ int main(int argc, char** argv) try {
                                {"gravitational", egrav}})},
       {"steps", static_cast<long long>(fs.steps)},
       {"wall_seconds", fs.wall_seconds},
-      {"backend", rubble::backend_name(rubble::default_backend())},
-      {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-      {"commit", RUBBLE_COMMIT},
       {"checks", Json::array(cj)},
       {"units", Json::object({{"x", "R"}, {"rho", "M/R^3"}})},
       {"profile", Json::object({{"x_label", "r"},
@@ -255,7 +252,7 @@ int main(int argc, char** argv) try {
                                 {"rho", prho},
                                 {"exact", Json::object({{"x", er}, {"rho", erho}})}})},
   });
-  rubble::verification::write_record(args.records, "polytrope-n1-" + std::to_string(fs.m.size()), record);
+  rubble::verification::write_record(args.records, "polytrope-n1-" + std::to_string(fs.m.size()), record, rubble::backend_name(rubble::default_backend()));
   return all_passed ? 0 : 1;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "polytrope_rung: error: %s\n", e.what());

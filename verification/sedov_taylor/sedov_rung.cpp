@@ -240,16 +240,13 @@ int main(int argc, char** argv) try {
         {"measures", measures_json(meas)},
         {"observed_order", orders},
         {"wall_seconds", fs.wall_seconds},
-        {"backend", fs.backend},
-        {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"checks", check_json},
         {"profile", Json::object({{"x", pr}, {"rho", prho}, {"v", pv}, {"p", pp},
                                   {"exact", Json::object({{"x", er}, {"rho", erho}, {"v", ev}, {"p", ep}})}})},
     });
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_%04d", args.label.c_str(), static_cast<int>(res));
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, fs.backend);
     std::fflush(stdout);
   }
   const int status = rubble::verification::rung_exit_status(all_checks, args.known_failures);

@@ -179,16 +179,13 @@ int main(int argc, char** argv) try {
         {"errors", Json::object({{"rho", L1(e.rho)}, {"v", L1(e.v)}, {"p", L1(e.p)}, {"u", L1(e.u)}})},
         {"observed_order", orders},
         {"wall_seconds", fs.wall_seconds},
-        {"backend", rubble::backend_name(rubble::default_backend())},
-        {"precision", sizeof(rubble::Real) == 8 ? "double" : "float"},
-        {"commit", RUBBLE_COMMIT},
         {"checks", Json::array(check_json)},
         {"profile", Json::object({{"x", px}, {"rho", prho}, {"v", pv}, {"p", pp}, {"u", pu},
                                   {"exact", Json::object({{"x", ex}, {"rho", erho}, {"v", ev}, {"p", ep}, {"u", eu}})}})},
     });
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_%06d", args.label.c_str(), static_cast<int>(res));
-    rubble::verification::write_record(args.records, stem, record);
+    rubble::verification::write_record(args.records, stem, record, rubble::backend_name(rubble::default_backend()));
 
     std::printf("%-22s res %7g  N %8zu  L1 rho %.3e  v %.3e  p %.3e  u %.3e  steps %6lld  wall %.2f s\n",
                 args.label.c_str(), res, n, e.rho, e.v, e.p, e.u, static_cast<long long>(fs.steps), fs.wall_seconds);

@@ -73,14 +73,6 @@ constexpr double kScanStep = 2e-4;  // sampling ratio 1 + 2e-4 (curvature leaves
 constexpr int kMapEta = 8;   // the maps in the record: every 8th η ...
 constexpr int kMapU = 6;     // ... and every 6th u
 
-std::string git_commit() {
-#ifdef RUBBLE_COMMIT
-  return RUBBLE_COMMIT;
-#else
-  return "unknown";
-#endif
-}
-
 std::string utc_now() {
   const std::time_t t = std::time(nullptr);
   char b[32];
@@ -451,16 +443,13 @@ Outcome tillotson_case(const MaterialConfig& m, const Args& args) {
                              {"rho_limit_tested", kRhoLimit}})},
       {"units", Json::object({{"p", "Pa"}, {"cs", "m/s"}, {"u", "J/kg"}, {"eta", "1"}})},
       {"wall_seconds", wall},
-      {"backend", "cpu"},
-      {"precision", sizeof(Real) == 8 ? "double" : "float"},
-      {"commit", git_commit()},
       {"timestamp", utc_now()},
       {"checks", Json::array(checks)},
   });
   rubble::verification::write_record(args.records,
                                      "tillotson_continuity-" + m.name + "-" + std::to_string(points) + "-cpu-" +
                                          (sizeof(Real) == 8 ? "double" : "float"),
-                                     record);
+                                     record, "cpu");
   std::printf("%-10s max jump %.2e (cut-off on %.2e), max |c2-FD| %.2e over %ld states, min c2/(A/rho0) eta>=1 %.3f, "
               "c2<=0 at %ld states (floored), cut-off: %ld lines jump at rho_limit, %ld elsewhere; %.2f s\n",
               m.name.c_str(), jump.value, jump_cut.value, fd.value, fd_checked, min_c2_compressed, nonpositive,
@@ -500,16 +489,13 @@ Outcome fd_case(const std::string& name, const EosParams& eos, const std::vector
       {"errors", Json::object({{"c2_fd", Json::object({{"max_rel", fd.value}})}})},
       {"maxima", Json::object({{"c2_fd", maxima_json(fd)}})},
       {"wall_seconds", wall},
-      {"backend", "cpu"},
-      {"precision", sizeof(Real) == 8 ? "double" : "float"},
-      {"commit", git_commit()},
       {"timestamp", utc_now()},
       {"checks", Json::array(checks)},
   });
   rubble::verification::write_record(args.records,
                                      "tillotson_continuity-" + name + "-" + std::to_string(checked) + "-cpu-" +
                                          (sizeof(Real) == 8 ? "double" : "float"),
-                                     record);
+                                     record, "cpu");
   std::printf("%-10s max |c2-FD| %.2e over %ld states (%s)\n", name.c_str(), fd.value, checked, fd.where.c_str());
   return o;
 }
