@@ -32,11 +32,9 @@ double lattice_cell_volume(Lattice lattice, double dx) {
   return v;
 }
 
-namespace {
-
 // Whether x belongs to a sphere or ring body (boxes keep every lattice point).
 template <int D>
-bool inside_shape(const BodyConfig& b, const Vec<D>& x) {
+static bool inside_shape(const BodyConfig& b, const Vec<D>& x) {
   if (b.shape != BodyShape::Sphere && b.shape != BodyShape::Ring) return true;
   double r2 = 0;
   for (int k = 0; k < D; ++k) r2 += (x[k] - b.center[k]) * (x[k] - b.center[k]);
@@ -51,7 +49,7 @@ bool inside_shape(const BodyConfig& b, const Vec<D>& x) {
 // Hexagonal / HCP: rows offset by dx/2, layers (3-D) in the A-B stacking
 // of close packing.
 template <int D>
-std::vector<Vec<D>> lattice_points(BodyConfig b) {
+std::vector<Vec<D>> lattice_points(BodyConfig b) {  // declared in initial_conditions.hpp
   if (b.shape == BodyShape::Sphere || b.shape == BodyShape::Ring) {
     for (int k = 0; k < D; ++k) {
       // a whole number of cells on each side of the centre, so that the
@@ -91,6 +89,8 @@ std::vector<Vec<D>> lattice_points(BodyConfig b) {
       }
   return pts;
 }
+
+namespace {
 
 // shape = "polytrope" (3-D): a lattice filling the unit ball with about
 // b.particles points, stretched radially so that the point at radius r_u
@@ -443,6 +443,7 @@ Box<D> domain_from_scene(const Scene& scene) {
 
 #define RUBBLE_INSTANTIATE(D)                                                                      \
   template double lattice_cell_volume<D>(Lattice, double);                                         \
+  template std::vector<Vec<D>> lattice_points<D>(BodyConfig);                                      \
   template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&); \
   template Box<D> domain_from_scene<D>(const Scene&);                                              \
   template double estimated_particle_count<D>(const Scene&);                                       \

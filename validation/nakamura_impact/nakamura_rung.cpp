@@ -14,8 +14,8 @@
 //   - the projectile's spacing s near dx such that its lattice holds the
 //     projectile mass 4/3 pi r^3 rho0 (the experiment's ~0.2 g): a few
 //     particles can only carry the right mass if their spacing is chosen for
-//     it (lattice_count replicates the cubic sphere lattice of
-//     initial_conditions.cpp; the run's measured projectile mass is checked);
+//     it (the count comes from the solver's own lattice, lattice_points of
+//     initial_conditions.hpp; the run's measured projectile mass is checked);
 // runs the scene through rubble::run_scene, and reads every snapshot.
 //
 // Measured: the target's damage at every output (mean D, fraction with
@@ -57,6 +57,7 @@
 #include "../../verification/common/conserved_csv.hpp"
 #include "../../verification/common/record.hpp"
 #include "rubble/io/snapshot.hpp"
+#include "rubble/scene/initial_conditions.hpp"
 #include "rubble/run.hpp"
 
 namespace {
@@ -93,29 +94,19 @@ Args parse_args(int argc, char** argv) {
   return a;
 }
 
-// Points of the cubic sphere lattice of initial_conditions.cpp (cell centres
-// c + (i + 1/2) s, i = -(floor(r/s) + 1) ... floor(r/s), kept where |x - c| < r).
-long lattice_count(double r, double s) {
-  const long k = long(std::floor(r / s)) + 1;
-  long n = 0;
-  for (long i = -k; i < k; ++i)
-    for (long j = -k; j < k; ++j)
-      for (long l = -k; l < k; ++l) {
-        const double x = (double(i) + 0.5) * s, y = (double(j) + 0.5) * s, z = (double(l) + 0.5) * s;
-        n += std::sqrt(x * x + y * y + z * z) < r;
-      }
-  return n;
-}
-
-// The spacing in [0.75 dx, 1.25 dx] whose lattice mass is closest to the
-// sphere's mass (the first of equals: the coarsest such spacing).
-double mass_matched_spacing(double r, double rho, double dx) {
-  const double want = 4.0 / 3.0 * std::numbers::pi * r * r * r * rho;
+// The spacing in [0.75 dx, 1.25 dx] whose lattice (the solver's own:
+// lattice_points) holds the mass of the sphere `prj` most closely (the first
+// of equals: the coarsest such spacing).
+double mass_matched_spacing(const rubble::BodyConfig& prj, double dx) {
+  const double want = 4.0 / 3.0 * std::numbers::pi * std::pow(prj.radius, 3) * prj.density;
   double best_s = dx, best_err = 1e300;
+  rubble::BodyConfig b = prj;
   for (int k = 0; k <= 4000; ++k) {
-    const double s = dx * (1.25 - 0.5 * k / 4000.0);
-    const double err = std::fabs(double(lattice_count(r, s)) * rho * s * s * s - want);
-    if (err < best_err * (1 - 1e-12)) best_err = err, best_s = s;
+    b.spacing = dx * (1.25 - 0.5 * k / 4000.0);
+    const double mass = double(rubble::lattice_points<3>(b).size()) * prj.density *
+                        rubble::lattice_cell_volume<3>(b.lattice, b.spacing);
+    const double err = std::fabs(mass - want);
+    if (err < best_err * (1 - 1e-12)) best_err = err, best_s = b.spacing;
   }
   return best_s;
 }
@@ -145,7 +136,7 @@ rubble::Scene build_scene(const Args& a, double n, Result& r) {
   auto& tgt = scene.bodies[0];
   auto& prj = scene.bodies[1];
   r.dx = 2 * tgt.radius / n;
-  r.s_proj = mass_matched_spacing(prj.radius, prj.density, r.dx);
+  r.s_proj = mass_matched_spacing(prj, r.dx);
   tgt.spacing = r.dx;
   prj.spacing = r.s_proj;
   scene.simulation.dt_min = 1e-12 * scene.simulation.end_time;

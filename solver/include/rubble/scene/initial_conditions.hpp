@@ -16,6 +16,14 @@ namespace rubble {
 template <int D>
 double lattice_cell_volume(Lattice lattice, double dx);
 
+// The particle positions of a box, sphere or ring body on its lattice
+// (b.lattice, b.spacing): lattice points inside [min, max), then inside the
+// shape; a sphere or ring has its lattice centred on its centre. Used by
+// generate_bodies, and by rungs that must know a body's particles before the
+// run (e.g. to match a small body's mass).
+template <int D>
+std::vector<Vec<D>> lattice_points(BodyConfig b);
+
 // Fill the store with every body of the scene: positions on the body's
 // lattice, mass = density * cell volume, velocity, internal energy (from the
 // pressure through the material's EOS if pressure is given), density, and
