@@ -30,7 +30,7 @@ def plots(case: str, records: list, out_dir: Path) -> list:
         n = len(shots)
         cols = min(n, 4)
         rows = (n + cols - 1) // cols
-        fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.4 * rows), squeeze=False)
+        fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.4 * rows), squeeze=False, layout="constrained")
         sc = None
         for k, ax in enumerate(axes.flat):
             if k >= n:
@@ -41,8 +41,10 @@ def plots(case: str, records: list, out_dir: Path) -> list:
                             vmin=0, vmax=1)
             ax.set_aspect("equal")
             ax.set_title(f"t = {s['t'] * 1e6:.1f} µs", fontsize=9)
-            ax.set_xlabel("x [cm]", fontsize=8)
-            ax.set_ylabel("y [cm]", fontsize=8)
+            if k // cols == rows - 1 or k + cols >= n:  # the lowest panel of its column
+                ax.set_xlabel("x [cm]", fontsize=8)
+            if k % cols == 0:
+                ax.set_ylabel("y [cm]", fontsize=8)
         if sc is not None:
             fig.colorbar(sc, ax=axes, shrink=0.8, label="damage D")
         fig.suptitle(f"target damage in the impact plane (|z| < 3 dx/4), n = {shots_rec['resolution']:g}", fontsize=10)
