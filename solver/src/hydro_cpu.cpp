@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <utility>
 
@@ -94,6 +95,12 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     p.porosity = porosity_params_from_config(m.porosity);
     p.plasticity = plasticity_params_from_config(m.plasticity);
     p.damage = damage_params_from_config(m.damage);
+    p.stress_diffusion = Real(m.stress_diffusion);
+    // Jaky's (1944) K0 = 1 - sin phi for a granular material (Feng et al.
+    // 2021); other solids get no geostatic correction of the deviator
+    p.k0 = m.plasticity.model == PlasticityType::DruckerPrager
+               ? Real(1 - std::sin(m.plasticity.friction_angle * std::numbers::pi / 180))
+               : Real(1);
     // dp: the lattice spacing of the first body of this material (the
     // artificial stress's W(dp); Gray, Monaghan & Swift 2001)
     p.dp = 0;
@@ -127,6 +134,7 @@ HydroCpu<D>::HydroCpu(const Scene& scene, ParticleStore<D>& ps, const Box<D>& do
   solid_ = f.solid;
   artificial_stress_ = f.artificial_stress;
   kernel_correction_ = f.kernel_correction;
+  stress_diffusion_ = f.stress_diffusion;
   if (solid_ && artificial_stress_) art_R_.assign(ps_.n, Mat<D>::zero());
   porosity_ = f.porosity;
   plasticity_ = f.plasticity;
@@ -196,6 +204,7 @@ RhsContext<D> HydroCpu<D>::context() {
   c.hfact = hfact_;
   c.summation = summation_;
   c.kernel_correction = kernel_correction_;
+  c.stress_diffusion = stress_diffusion_;
   c.art_R = art_R_.empty() ? nullptr : art_R_.data();
   c.xsph_epsilon = xsph_epsilon_;
   c.courant = courant_;
@@ -478,6 +487,7 @@ void HydroCpu<D>::solid_rates() {
       GradientSums<D>& own = grad_sums_[a];
       own.L += sums.L;
       own.M += sums.M;
+      own.Sd += sums.Sd;
       if (sums.r2_min < own.r2_min) own.r2_min = sums.r2_min;
     }
     for (std::size_t a = lo; a < hi; ++a)

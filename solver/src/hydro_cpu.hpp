@@ -122,6 +122,7 @@ class HydroCpu {
   SelfGravity gravity_;  // off unless the scene's [gravity] turns it on (3-D)
   bool solid_ = false;
   bool kernel_correction_ = false;
+  bool stress_diffusion_ = false;  // a solid material diffuses its deviator
   bool artificial_stress_ = false;
   std::vector<Mat<D>> art_R_;   // solids with artificial stress: R_a (scratch)
   Real stagger_dt_ = 0;         // inside evaluate_staggered: its dt (0 otherwise)

@@ -660,7 +660,7 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   // has no tension cut-off)
   std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
                                     "p_min",  "cs_min",        "cs_floor",         "shear_modulus",
-                                    "artificial_stress",
+                                    "artificial_stress",             "stress_diffusion",
                                     "porosity", "plasticity", "damage"};
   if (m.eos == EosType::IdealGas) known.push_back("gamma");
   if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
@@ -768,6 +768,16 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
                " (the weight ramps from 0 at onset to 1 at full; defaults 1.0 and 0.95)");
     if (m.artificial_stress.enabled && !(m.shear_modulus > 0))
       fail(ap, "artificial stress acts on solids only; give the material a shear_modulus > 0 or remove it");
+  }
+  // deviatoric stress diffusion (physics/stress_diffusion.hpp)
+  if (auto x = number(t, "stress_diffusion", p)) {
+    require(*x >= 0 && *x <= 1, t, "stress_diffusion", p, *x, "in [0, 1] (Feng et al. 2021 use 0.1; 0 = off)");
+    if (*x > 0 && !(m.shear_modulus > 0))
+      fail(sub(p, "stress_diffusion"),
+           "stress diffusion acts on the deviatoric stress of solids only; give the material a shear_modulus > 0 or "
+           "remove it",
+           t.get("stress_diffusion"));
+    m.stress_diffusion = *x;
   }
   if (const toml::table* q = table(t, "porosity", p)) read_porosity(*q, sub(p, "porosity"), m);
   if (const toml::table* q = table(t, "plasticity", p)) read_plasticity(*q, sub(p, "plasticity"), m);

@@ -520,3 +520,21 @@ TEST(SolidRun, CorrectionFieldOnlyWithKernelCorrection) {
   fluid.insert(fluid.find("\n[materials"), "\nkernel_correction = true\n");
   EXPECT_FALSE(has(fields(fluid), "corr_K"));
 }
+
+// stress_diffusion (physics/stress_diffusion.hpp): a number in [0, 1] on a
+// solid; an error naming the key otherwise.
+TEST(SolidScene, StressDiffusionIsReadAndValidated) {
+  EXPECT_EQ(parse_scene(block_scene("shear_modulus = 0.22"), "t.toml").materials[0].stress_diffusion, 0);
+  EXPECT_EQ(parse_scene(block_scene("shear_modulus = 0.22\nstress_diffusion = 0.1"), "t.toml").materials[0].stress_diffusion,
+            0.1);
+  for (const char* bad : {"shear_modulus = 0.22\nstress_diffusion = -0.1", "shear_modulus = 0.22\nstress_diffusion = 2.0",
+                          "stress_diffusion = 0.1"}) {
+    try {
+      parse_scene(block_scene(bad), "t.toml");
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("materials.rubber.stress_diffusion"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("t.toml"), std::string::npos) << e.what();
+    }
+  }
+}

@@ -729,7 +729,7 @@ struct CudaStepper<D>::Impl {
   CachingDeviceAllocator temp;  // temporary storage of the sorts and reductions
   KernelType kernel;
   Real hfact, courant, force_factor, h_tolerance, xsph_epsilon, shifting;
-  bool summation, solid = false, kernel_correction = false, artificial_stress = false;
+  bool summation, solid = false, kernel_correction = false, artificial_stress = false, stress_diffusion = false;
   bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
   bool viscosity_switch = false;  // a material has the viscosity switch (end-of-step bounds)
   bool coulomb_walls = false;     // a wall has Coulomb friction (end-of-step friction anchors)
@@ -795,6 +795,7 @@ struct CudaStepper<D>::Impl {
     solid = f.solid;
     artificial_stress = f.artificial_stress;
     kernel_correction = f.kernel_correction;
+    stress_diffusion = f.stress_diffusion;
     porosity = f.porosity;
     plasticity = f.plasticity;
     damage = f.damage;
@@ -832,6 +833,7 @@ struct CudaStepper<D>::Impl {
     c.hfact = hfact;
     c.summation = summation;
     c.kernel_correction = kernel_correction;
+    c.stress_diffusion = stress_diffusion;
     c.art_R = art_R.n ? art_R.data() : nullptr;
     c.xsph_epsilon = xsph_epsilon;
     c.courant = courant;

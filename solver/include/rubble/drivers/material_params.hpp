@@ -26,6 +26,8 @@ struct MaterialParams {
   Real as_clump_onset;  // clumping form: chi > 0 below onset * spacing (0 = Monaghan's form)
   Real as_clump_full;   // clumping form: chi = 1 below full * spacing
   Real dp;             // initial particle spacing of the material's bodies
+  Real stress_diffusion;  // zeta of the deviatoric stress diffusion (0 = off; physics/stress_diffusion.hpp)
+  Real k0;                // its geostatic lateral stress ratio K0 (1 - sin phi for Drucker-Prager, else 1)
   PorosityParams porosity;      // p-alpha (porosity.enabled = false: not porous)
   PlasticityParams plasticity;  // model None: elastic (or fluid)
   DamageParams damage;          // enabled = false: no tensile damage

@@ -26,6 +26,7 @@
 #include "rubble/physics/porosity.hpp"
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/physics/solid.hpp"
+#include "rubble/physics/stress_diffusion.hpp"
 #include "rubble/physics/timestep.hpp"
 #include "rubble/physics/wall_extrapolation.hpp"
 #include "rubble/physics/wall_friction.hpp"
@@ -53,6 +54,7 @@ struct RhsContext {
   Real hfact = 0;
   bool summation = false;          // summation density (grad-h terms) or continuity
   bool kernel_correction = false;  // solids: corrected velocity gradient
+  bool stress_diffusion = false;   // solids: a material diffuses its deviator (stress_diffusion.hpp)
   Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
   // solids: each particle's solid_inverses, computed once per evaluation
   // (solid_inverses_particle); nullptr: computed at every pair instead
@@ -539,6 +541,9 @@ struct GradientSums {
   // staggered stress update, sum_b m_b (v_b - v_a) (x) gbar instead (with
   // the correction that sum is rho_a L_a), and unused otherwise
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
+  // the stress diffusion's sum D_a (physics/stress_diffusion.hpp; zero
+  // when the material has none)
+  Mat<D> Sd = Mat<D>::zero();
   Real r2_min = std::numeric_limits<Real>::max();
 };
 
@@ -592,6 +597,19 @@ RUBBLE_HD_INLINE void add_gradient_pair(const RhsContext<D>& c, std::uint32_t a,
   sums.L += velocity_gradient_pair_term<D>(s.m[b], rho_w, t.v_ba, t.g);
   if (c.kernel_correction) sums.M += correction_pair_term<D>(s.m[b], rho_w, t.x_ba, t.g);
   else if (c.stagger_dt > Real(0)) sums.M += s.m[b] * Mat<D>::outer(t.v_ba, t.g);
+  // stress diffusion: among free particles of one material (not across a
+  // contact between materials, not with wall particles, whose stress is
+  // extrapolated from the material itself)
+  if (!c.stress_diffusion) return;
+  const MaterialParams& mat = c.mat[s.material_id[a]];
+  if (mat.stress_diffusion > Real(0) && s.material_id[b] == s.material_id[a] &&
+      !(s.boundary && (s.boundary[a] || s.boundary[b]))) {
+    const Vec<D> dx = -t.x_ba;  // x_a - x_b
+    const Mat<D> dSH =
+        geostatic_deviator_difference<D>(dx, c.body_force, Real(0.5) * (s.rho[a] + s.rho[b]), mat.k0);
+    sums.Sd += stress_diffusion_pair_term<D>(s.S[a], s.S[b], dSH, s.m[b] / s.rho[b], dx, t.g,
+                                             monaghan_h<D>(c.kernel, s.h[a]));
+  }
 }
 
 // The total stress sigma = f S - p I that acts in the momentum equation
@@ -630,6 +648,8 @@ RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_
   }
   const MaterialParams& mat = c.mat[s.material_id[a]];
   s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
+  if (c.stress_diffusion && mat.stress_diffusion > Real(0))
+    s.dSdt[a] += (mat.stress_diffusion * monaghan_h<D>(c.kernel, s.h[a]) * s.cs[a]) * sums.Sd;
   if (s.ddamage_root_dt) s.ddamage_root_dt[a] = damage_rate_particle<D>(c, a);
   if (c.stagger_dt > Real(0)) {  // for staggered_update_particle: the gradient and the continuity rate
     const Mat<D> Lm = c.kernel_correction ? s.rho[a] * L : sums.M;

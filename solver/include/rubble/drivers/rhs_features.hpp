@@ -15,6 +15,7 @@ struct RhsFeatures {
   bool solid = false;              // a material has a shear modulus: feature set Solid
   bool artificial_stress = false;  // a solid material has artificial stress
   bool kernel_correction = false;  // solids: corrected velocity gradient
+  bool stress_diffusion = false;   // a solid material diffuses its deviatoric stress
   bool porosity = false;           // a material is porous: d alpha/dt with the rates, end-of-step envelope return
   bool plasticity = false;         // a solid material yields: return mapping in each evaluation and step
   bool damage = false;             // a solid material has tensile damage: its growth rate, end-of-step cap
@@ -30,6 +31,7 @@ RhsFeatures rhs_features(const Scene& scene, const std::vector<MaterialParams>& 
   for (const MaterialParams& m : materials) {
     f.solid = f.solid || m.shear_modulus > Real(0);
     f.artificial_stress = f.artificial_stress || m.as_exponent > Real(0);
+    f.stress_diffusion = f.stress_diffusion || (m.shear_modulus > Real(0) && m.stress_diffusion > Real(0));
     f.porosity = f.porosity || m.porosity.enabled;
     f.plasticity = f.plasticity || m.plasticity.model != PlasticityModel::None;
     f.damage = f.damage || m.damage.enabled;

@@ -180,6 +180,7 @@ struct MaterialConfig {
   ArtificialConductivity conductivity;
   double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid
   ArtificialStressConfig artificial_stress;
+  double stress_diffusion = 0;  // zeta of the deviatoric stress diffusion (solids; 0 = off)
   PorosityConfig porosity;      // off unless the material has a porosity table
   PlasticityConfig plasticity;  // none unless the material has a plasticity table
   DamageConfig damage;          // off unless the material has a damage table
