@@ -241,7 +241,9 @@ TEST_F(Cli, CudaBackendAccepted) {
   write_scene("ok.toml", kValid);
   const Result r = rubble("run ok.toml --backend cuda --quiet");
   EXPECT_EQ(r.err.find("no CUDA backend"), std::string::npos) << r.err;
-  if (r.code != 0) EXPECT_NE(r.err.find("no CUDA device"), std::string::npos) << r.err;
+  if (r.code != 0) {
+    EXPECT_NE(r.err.find("no CUDA device"), std::string::npos) << r.err;
+  }
 }
 #endif
 
