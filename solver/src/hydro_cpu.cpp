@@ -463,6 +463,7 @@ void HydroCpu<D>::solid_rates() {
   // are complete when its thread has walked its range, and the thread then
   // finishes its own particles (solid_gradient_finish).
   grad_sums_.resize(n);
+  if (c.stress_diffusion) sd_sums_.resize(n);  // only a scene whose material diffuses holds it
 #pragma omp parallel reduction(+ : fallbacks)
   {
     // plain variables, not a structured binding: clang before 16 cannot
@@ -470,10 +471,13 @@ void HydroCpu<D>::solid_rates() {
     const auto range = own_range(n);
     const std::size_t lo = range.first, hi = range.second;
     for (std::size_t a = lo; a < hi; ++a) grad_sums_[a] = GradientSums<D>{};
+    if (c.stress_diffusion)
+      for (std::size_t a = lo; a < hi; ++a) sd_sums_[a] = Mat<D>::zero();
     for (std::size_t a = lo; a < hi; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
       const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, c.solid_inv[a].inv_h);
       GradientSums<D> sums;
+      Mat<D> sd = Mat<D>::zero();
       nbrs_.for_each(a, [&](std::uint32_t b) {
         const bool mine = b >= lo && b < hi;
         if (mine && b < a) return;  // done from b's side
@@ -483,15 +487,20 @@ void HydroCpu<D>::solid_rates() {
         if (!terms.active) return;
         add_gradient_pair<D>(c, ia, b, terms, sums);
         if (mine) add_gradient_pair<D>(c, b, ia, other_side<D>(terms), grad_sums_[b]);
+        if (!c.stress_diffusion) return;
+        add_stress_diffusion_pair<D>(c, ia, b, terms, sd);
+        if (mine) add_stress_diffusion_pair<D>(c, b, ia, other_side<D>(terms), sd_sums_[b]);
       });
       GradientSums<D>& own = grad_sums_[a];
       own.L += sums.L;
       own.M += sums.M;
-      own.Sd += sums.Sd;
+      if (c.stress_diffusion) sd_sums_[a] += sd;
       if (sums.r2_min < own.r2_min) own.r2_min = sums.r2_min;
     }
     for (std::size_t a = lo; a < hi; ++a)
-      if (!solid_gradient_finish<D>(c, static_cast<std::uint32_t>(a), grad_sums_[a])) ++fallbacks;
+      if (!solid_gradient_finish<D>(c, static_cast<std::uint32_t>(a), grad_sums_[a],
+                                    c.stress_diffusion ? &sd_sums_[a] : nullptr))
+        ++fallbacks;
   }
   fallbacks_last_ = fallbacks;
   fallbacks_total_ += fallbacks;

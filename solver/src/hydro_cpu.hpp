@@ -69,6 +69,7 @@ class HydroCpu {
     lists_in_order_ = false;
     std::vector<SolidInverses>().swap(solid_inv_);
     std::vector<GradientSums<D>>().swap(grad_sums_);
+    std::vector<Mat<D>>().swap(sd_sums_);
     std::vector<Mat<D>>().swap(stagger_Lm_);
     std::vector<Real>().swap(stagger_du_);
     std::vector<Real>().swap(as_chi_);
@@ -131,6 +132,7 @@ class HydroCpu {
   std::vector<Real> stagger_du_;    // evaluate_staggered: the energy rate's correction (scratch)
   std::vector<SolidInverses> solid_inv_;  // solids: 1/H, 1/rho^2 per particle (scratch of solid_rates)
   std::vector<GradientSums<D>> grad_sums_;  // solids: pass 1's neighbour sums (scratch of solid_rates)
+  std::vector<Mat<D>> sd_sums_;  // ... and the stress diffusion's, when a material diffuses (else empty)
   std::int64_t fallbacks_total_ = 0, fallbacks_last_ = 0;
   Real xsph_epsilon_ = 0;  // 0 = off
   Real shifting_ = 0;       // particle shifting coefficient A (0 = off)

@@ -541,9 +541,6 @@ struct GradientSums {
   // staggered stress update, sum_b m_b (v_b - v_a) (x) gbar instead (with
   // the correction that sum is rho_a L_a), and unused otherwise
   Mat<D> L = Mat<D>::zero(), M = Mat<D>::zero();
-  // the stress diffusion's sum D_a (physics/stress_diffusion.hpp; zero
-  // when the material has none)
-  Mat<D> Sd = Mat<D>::zero();
   Real r2_min = std::numeric_limits<Real>::max();
 };
 
@@ -597,19 +594,25 @@ RUBBLE_HD_INLINE void add_gradient_pair(const RhsContext<D>& c, std::uint32_t a,
   sums.L += velocity_gradient_pair_term<D>(s.m[b], rho_w, t.v_ba, t.g);
   if (c.kernel_correction) sums.M += correction_pair_term<D>(s.m[b], rho_w, t.x_ba, t.g);
   else if (c.stagger_dt > Real(0)) sums.M += s.m[b] * Mat<D>::outer(t.v_ba, t.g);
-  // stress diffusion: among free particles of one material (not across a
-  // contact between materials, not with wall particles, whose stress is
-  // extrapolated from the material itself)
-  if (!c.stress_diffusion) return;
+}
+
+// Adds a pair's stress-diffusion term to a's sum D_a (physics/
+// stress_diffusion.hpp), b being the other particle: among free particles
+// of one material whose material diffuses (not across a contact between
+// materials, not with wall particles, whose stress is extrapolated from the
+// material itself). Called only when c.stress_diffusion; the sum is kept
+// apart from GradientSums so that scenes without it hold no storage for it.
+template <int D>
+RUBBLE_HD_INLINE void add_stress_diffusion_pair(const RhsContext<D>& c, std::uint32_t a, std::uint32_t b,
+                                                const GradientPairTerms<D>& t, Mat<D>& Sd) {
+  const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  if (mat.stress_diffusion > Real(0) && s.material_id[b] == s.material_id[a] &&
-      !(s.boundary && (s.boundary[a] || s.boundary[b]))) {
-    const Vec<D> dx = -t.x_ba;  // x_a - x_b
-    const Mat<D> dSH =
-        geostatic_deviator_difference<D>(dx, c.body_force, Real(0.5) * (s.rho[a] + s.rho[b]), mat.k0);
-    sums.Sd += stress_diffusion_pair_term<D>(s.S[a], s.S[b], dSH, s.m[b] / s.rho[b], dx, t.g,
-                                             monaghan_h<D>(c.kernel, s.h[a]));
-  }
+  if (!(mat.stress_diffusion > Real(0)) || s.material_id[b] != s.material_id[a] ||
+      (s.boundary && (s.boundary[a] || s.boundary[b])))
+    return;
+  const Vec<D> dx = -t.x_ba;  // x_a - x_b
+  const Mat<D> dSH = geostatic_deviator_difference<D>(dx, c.body_force, Real(0.5) * (s.rho[a] + s.rho[b]), mat.k0);
+  Sd += stress_diffusion_pair_term<D>(s.S[a], s.S[b], dSH, s.m[b] / s.rho[b], dx, t.g, monaghan_h<D>(c.kernel, s.h[a]));
 }
 
 // The total stress sigma = f S - p I that acts in the momentum equation
@@ -632,8 +635,10 @@ RUBBLE_HD_INLINE Mat<D> artificial_stress_particle(const RhsContext<D>& c, std::
 
 // From a's complete sums: C_a and K_a, L_a, dS/dt, the damage rate and R_a.
 // Returns false when the correction matrix was ill-conditioned (identity used).
+// Sd: a's stress-diffusion sum D_a, or nullptr when no material diffuses.
 template <int D>
-RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_t a, const GradientSums<D>& sums) {
+RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_t a, const GradientSums<D>& sums,
+                                            const Mat<D>* Sd = nullptr) {
   const StoreView<D>& s = c.s;
   Mat<D> L = sums.L;
   // sqrt is monotonic and correctly rounded: the nearest distance itself
@@ -648,8 +653,8 @@ RUBBLE_HD_INLINE bool solid_gradient_finish(const RhsContext<D>& c, std::uint32_
   }
   const MaterialParams& mat = c.mat[s.material_id[a]];
   s.dSdt[a] = mat.shear_modulus > Real(0) ? deviatoric_stress_rate<D>(s.S[a], L, mat.shear_modulus) : Mat<D>::zero();
-  if (c.stress_diffusion && mat.stress_diffusion > Real(0))
-    s.dSdt[a] += (mat.stress_diffusion * monaghan_h<D>(c.kernel, s.h[a]) * s.cs[a]) * sums.Sd;
+  if (Sd && mat.stress_diffusion > Real(0))
+    s.dSdt[a] += (mat.stress_diffusion * monaghan_h<D>(c.kernel, s.h[a]) * s.cs[a]) * *Sd;
   if (s.ddamage_root_dt) s.ddamage_root_dt[a] = damage_rate_particle<D>(c, a);
   if (c.stagger_dt > Real(0)) {  // for staggered_update_particle: the gradient and the continuity rate
     const Mat<D> Lm = c.kernel_correction ? s.rho[a] * L : sums.M;
@@ -720,13 +725,16 @@ RUBBLE_HD_INLINE void staggered_energy_particle(const RhsContext<D>& c, std::uin
 template <int D, class Each>
 RUBBLE_HD_INLINE bool solid_gradient_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   GradientSums<D> sums;
+  Mat<D> Sd = Mat<D>::zero();
   const KernelAt<D> ka = kernel_at_inv<D>(c.kernel, solid_inverses_particle<D>(c, a).inv_h);
   each([&](std::uint32_t b) {
     const GradientPairTerms<D> t = gradient_pair_terms<D>(c, a, b, ka, c.domain.separation(c.s.x[a], c.s.x[b]));
     if (t.r2 > Real(0) && t.r2 < sums.r2_min) sums.r2_min = t.r2;
-    if (t.active) add_gradient_pair<D>(c, a, b, t, sums);
+    if (!t.active) return;
+    add_gradient_pair<D>(c, a, b, t, sums);
+    if (c.stress_diffusion) add_stress_diffusion_pair<D>(c, a, b, t, Sd);
   });
-  return solid_gradient_finish<D>(c, a, sums);
+  return solid_gradient_finish<D>(c, a, sums, c.stress_diffusion ? &Sd : nullptr);
 }
 
 template <int D>
