@@ -22,6 +22,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
@@ -433,7 +434,7 @@ using rubble::test::parse_error;
 
 struct TempDir {
   std::filesystem::path path;
-  explicit TempDir(const std::string& name) : path(std::filesystem::temp_directory_path() / ("rubble_dmg_" + name)) {
+  explicit TempDir(const std::string& name) : path(std::filesystem::temp_directory_path() / ("rubble_dmg_" + std::to_string(getpid()) + "_" + name)) {
     std::filesystem::remove_all(path);
   }
   ~TempDir() { std::filesystem::remove_all(path); }

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "rubble/core/error.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -46,7 +47,7 @@ void expect_error(const std::string& text, const std::string& key, const std::st
 
 // A fresh, empty directory under the system temp dir.
 std::filesystem::path temp_dir(const std::string& name) {
-  const auto p = std::filesystem::temp_directory_path() / ("rubble_test_gravity_" + name);
+  const auto p = std::filesystem::temp_directory_path() / ("rubble_test_gravity_" + std::to_string(getpid()) + "_" + name);
   std::filesystem::remove_all(p);
   return p;
 }

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
@@ -70,7 +71,7 @@ using rubble::test::parse_error;
 
 struct TempDir {
   std::filesystem::path path;
-  explicit TempDir(const std::string& name) : path(std::filesystem::temp_directory_path() / ("rubble_pp_" + name)) {
+  explicit TempDir(const std::string& name) : path(std::filesystem::temp_directory_path() / ("rubble_pp_" + std::to_string(getpid()) + "_" + name)) {
     std::filesystem::remove_all(path);
   }
   ~TempDir() { std::filesystem::remove_all(path); }

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <variant>
+#include <unistd.h>
 
 #include "rubble/core/error.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -26,7 +27,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path temp_dir(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("rubble_test_restart_" + name);
+  const auto p = fs::temp_directory_path() / ("rubble_test_restart_" + std::to_string(getpid()) + "_" + name);
   fs::remove_all(p);
   return p;
 }

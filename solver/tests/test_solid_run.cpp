@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <unistd.h>
 
 #include "rubble/core/error.hpp"
 #include "rubble/io/snapshot.hpp"
@@ -37,7 +38,7 @@ std::string block_scene(const std::string& material_extra, const std::string& ex
 // Runs a scene quietly into a fresh temporary folder (the caller removes
 // it) and returns the folder.
 std::filesystem::path run_in_temp_dir(const Scene& s, const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + name);
+  const auto dir = std::filesystem::temp_directory_path() / ("rubble_solid_" + std::to_string(getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   RunOptions opt;
   opt.out_dir = dir.string();

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
@@ -149,7 +150,7 @@ TEST(ViscositySwitch, SceneKeysDefaultsAndErrors) {
 
 TEST(ViscositySwitch, SodTubeRaisesAlphaAtTheShockOnly) {
   auto run = [](const std::string& viscosity, const std::string& name) {
-    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("rubble_avsw_" + name);
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("rubble_avsw_" + std::to_string(getpid()) + "_" + name);
     std::filesystem::remove_all(dir);
     const Scene s = parse_scene(sod_scene(viscosity), "t.toml");
     RunOptions opt;
