@@ -34,6 +34,9 @@
 //     least 2 free neighbours within 1.5 dx (a particle or a pair that has
 //     detached from the front does not count); also x99, the x below which
 //     99 % of the mass lies;
+//   - the tail: the mass fraction beyond the experiment's toe, and the
+//     median inelastic volume strain eps_v (the tension-cracking opening)
+//     of the particles beyond x99 and behind it (deposit_tail);
 //   - final height H_inf at the back wall: the largest y + dx/2 of the free
 //     particles with x < 2 dx;
 //   - the free-surface profile h(x): the largest y + dx/2 in bins of 5 mm;
@@ -219,7 +222,7 @@ rubble::Scene build_scene(const Args& args, Setup& st) {
 struct Frame {
   double t = 0;
   std::vector<double> x, y, eps;  // free particles
-  std::vector<double> m;
+  std::vector<double> m, eps_v;    // eps_v: inelastic volume strain (0 when not stored)
 };
 
 Frame read_frame(const std::filesystem::path& f) {
@@ -234,6 +237,7 @@ Frame read_frame(const std::filesystem::path& f) {
     fr.y.push_back(ps.x[i][1]);
     fr.eps.push_back(ps.eps_p.empty() ? 0.0 : double(ps.eps_p[i]));
     fr.m.push_back(ps.m[i]);
+    fr.eps_v.push_back(ps.eps_v.empty() ? 0.0 : double(ps.eps_v[i]));
   }
   return fr;
 }
@@ -293,6 +297,37 @@ double mass_quantile_x(const Frame& f, double q) {
     if (c >= q * mt) return f.x[k];
   }
   return f.x[idx.back()];
+}
+
+// The deposit's tail: the mass beyond the experiment's toe (kExpSurfX.back())
+// as a fraction of the column's, and the median inelastic volume strain
+// eps_v (tension-cracking opening, particle_rates.hpp) of the particles
+// beyond x99 and of those behind it. A thin front that spreads opens at the
+// Drucker-Prager apex (p = 0: no friction) and keeps that opening: the
+// measure of how far the tail's particles have separated.
+struct Tail {
+  double mass_beyond_experiment = NAN, eps_v_tail = NAN, eps_v_bulk = NAN;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+Tail deposit_tail(const Frame& f, double dx, double x99, double exp_toe) {
+  Tail t;
+  double mt = 0, mb = 0;
+  std::vector<double> tail, bulk;
+  for (std::size_t k = 0; k < f.x.size(); ++k) {
+    mt += f.m[k];
+    if (f.x[k] + 0.5 * dx > exp_toe) mb += f.m[k];
+    (f.x[k] > x99 ? tail : bulk).push_back(f.eps_v[k]);
+  }
+  t.mass_beyond_experiment = mb / mt;
+  t.eps_v_tail = median(tail);
+  t.eps_v_bulk = median(bulk);
+  return t;
 }
 
 double height_at_wall(const Frame& f, double dx) {
@@ -388,6 +423,7 @@ struct Result {
   double wall = 0;
   double ke_peak = NAN, t_ke_peak = NAN, ke_final = NAN, ke_ratio = NAN;
   double toe = NAN, x99 = NAN, h_wall = NAN;
+  Tail tail;
   std::vector<double> px, ph;
   double surface_L1 = NAN;
   Line fail_final, fail_early;
@@ -468,6 +504,7 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
 
   r.toe = toe_position(last, st.dx);
   r.x99 = mass_quantile_x(last, 0.99);
+  r.tail = deposit_tail(last, st.dx, r.x99, kExpSurfX.back());
   r.h_wall = height_at_wall(last, st.dx);
   surface_profile(last, st.dx, r.px, r.ph);
   double l1 = 0;
@@ -496,6 +533,8 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
               "(end), %.2f deg (t = %.3f s); KE end/peak %.2e (peak at %.3f s); min pair %.3f dx; min x %.2e, min y %.2e\n",
               r.toe, r.x99, r.h_wall, r.surface_L1, r.fail_final.angle, r.fail_early.angle, r.t_early, r.ke_ratio,
               r.t_ke_peak, r.min_pair, r.min_x, r.min_y);
+  std::printf("  tail: %.2f %% of the mass beyond the experiment's toe; median eps_v beyond x99 %.3f, behind it %.1e\n",
+              100 * r.tail.mass_beyond_experiment, r.tail.eps_v_tail, r.tail.eps_v_bulk);
   if (!args.keep) std::filesystem::remove_all(out);
   return r;
 }
@@ -672,6 +711,9 @@ int run_column(const Args& args) {
                                  {"x99", r.x99},
                                  {"normalised", (r.toe - r.st.L0) / r.st.L0},
                                  {"experiment", exp_toe},
+                                 {"mass_beyond_experiment", r.tail.mass_beyond_experiment},
+                                 {"eps_v_median_beyond_x99", r.tail.eps_v_tail},
+                                 {"eps_v_median_behind_x99", r.tail.eps_v_bulk},
                                  {"lube2005", r.st.L0 * (1 + lube_runout(r.st.a))},
                                  {"lajeunesse2005", r.st.L0 * (1 + lajeunesse_runout(r.st.a))}})},
         {"height_at_wall", Json::object({{"h", r.h_wall}, {"experiment", exp_h}})},
