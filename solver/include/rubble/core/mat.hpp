@@ -11,45 +11,45 @@ template <int D>
 struct Mat {
   Real m[D][D];
 
-  RUBBLE_HD static Mat zero() {
+  RUBBLE_HD_SMALL static Mat zero() {
     Mat a;
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) a.m[i][j] = Real(0);
     return a;
   }
-  RUBBLE_HD static Mat identity() {
+  RUBBLE_HD_SMALL static Mat identity() {
     Mat a = zero();
     for (int i = 0; i < D; ++i) a.m[i][i] = Real(1);
     return a;
   }
   // u (x) v: (u v^T)_ij = u_i v_j
-  RUBBLE_HD static Mat outer(const Vec<D>& u, const Vec<D>& v) {
+  RUBBLE_HD_SMALL static Mat outer(const Vec<D>& u, const Vec<D>& v) {
     Mat a;
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) a.m[i][j] = u[i] * v[j];
     return a;
   }
-  RUBBLE_HD Real* operator[](int i) { return m[i]; }
-  RUBBLE_HD const Real* operator[](int i) const { return m[i]; }
+  RUBBLE_HD_SMALL Real* operator[](int i) { return m[i]; }
+  RUBBLE_HD_SMALL const Real* operator[](int i) const { return m[i]; }
 
-  RUBBLE_HD Mat& operator+=(const Mat& o) {
+  RUBBLE_HD_SMALL Mat& operator+=(const Mat& o) {
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) m[i][j] += o.m[i][j];
     return *this;
   }
-  RUBBLE_HD Mat& operator-=(const Mat& o) {
+  RUBBLE_HD_SMALL Mat& operator-=(const Mat& o) {
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) m[i][j] -= o.m[i][j];
     return *this;
   }
   // exact element-wise equality (snapshot round trips)
-  RUBBLE_HD bool operator==(const Mat& o) const {
+  RUBBLE_HD_SMALL bool operator==(const Mat& o) const {
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j)
         if (m[i][j] != o.m[i][j]) return false;
     return true;
   }
-  RUBBLE_HD Mat& operator*=(Real s) {
+  RUBBLE_HD_SMALL Mat& operator*=(Real s) {
     for (int i = 0; i < D; ++i)
       for (int j = 0; j < D; ++j) m[i][j] *= s;
     return *this;
@@ -57,16 +57,16 @@ struct Mat {
 };
 
 template <int D>
-RUBBLE_HD_INLINE Mat<D> operator+(Mat<D> a, const Mat<D>& b) { return a += b; }
+RUBBLE_HD_SMALL Mat<D> operator+(Mat<D> a, const Mat<D>& b) { return a += b; }
 template <int D>
-RUBBLE_HD_INLINE Mat<D> operator-(Mat<D> a, const Mat<D>& b) { return a -= b; }
+RUBBLE_HD_SMALL Mat<D> operator-(Mat<D> a, const Mat<D>& b) { return a -= b; }
 template <int D>
-RUBBLE_HD_INLINE Mat<D> operator*(Mat<D> a, Real s) { return a *= s; }
+RUBBLE_HD_SMALL Mat<D> operator*(Mat<D> a, Real s) { return a *= s; }
 template <int D>
-RUBBLE_HD_INLINE Mat<D> operator*(Real s, Mat<D> a) { return a *= s; }
+RUBBLE_HD_SMALL Mat<D> operator*(Real s, Mat<D> a) { return a *= s; }
 
 template <int D>
-RUBBLE_HD_INLINE Mat<D> operator*(const Mat<D>& a, const Mat<D>& b) {
+RUBBLE_HD_SMALL Mat<D> operator*(const Mat<D>& a, const Mat<D>& b) {
   Mat<D> c = Mat<D>::zero();
   for (int i = 0; i < D; ++i)
     for (int k = 0; k < D; ++k)
@@ -75,7 +75,7 @@ RUBBLE_HD_INLINE Mat<D> operator*(const Mat<D>& a, const Mat<D>& b) {
 }
 
 template <int D>
-RUBBLE_HD_INLINE Vec<D> operator*(const Mat<D>& a, const Vec<D>& v) {
+RUBBLE_HD_SMALL Vec<D> operator*(const Mat<D>& a, const Vec<D>& v) {
   Vec<D> r = Vec<D>::zero();
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) r[i] += a.m[i][j] * v[j];
@@ -83,7 +83,7 @@ RUBBLE_HD_INLINE Vec<D> operator*(const Mat<D>& a, const Vec<D>& v) {
 }
 
 template <int D>
-RUBBLE_HD_INLINE Mat<D> transpose(const Mat<D>& a) {
+RUBBLE_HD_SMALL Mat<D> transpose(const Mat<D>& a) {
   Mat<D> t;
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) t.m[i][j] = a.m[j][i];
@@ -91,7 +91,7 @@ RUBBLE_HD_INLINE Mat<D> transpose(const Mat<D>& a) {
 }
 
 template <int D>
-RUBBLE_HD_INLINE Real trace(const Mat<D>& a) {
+RUBBLE_HD_SMALL Real trace(const Mat<D>& a) {
   Real t = 0;
   for (int i = 0; i < D; ++i) t += a.m[i][i];
   return t;
@@ -99,7 +99,7 @@ RUBBLE_HD_INLINE Real trace(const Mat<D>& a) {
 
 // a : b = a_ij b_ij
 template <int D>
-RUBBLE_HD_INLINE Real double_dot(const Mat<D>& a, const Mat<D>& b) {
+RUBBLE_HD_SMALL Real double_dot(const Mat<D>& a, const Mat<D>& b) {
   Real s = 0;
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) s += a.m[i][j] * b.m[i][j];
@@ -109,7 +109,7 @@ RUBBLE_HD_INLINE Real double_dot(const Mat<D>& a, const Mat<D>& b) {
 // Every entry exactly zero (a solid pair skips the artificial stress of two
 // particles without any).
 template <int D>
-RUBBLE_HD_INLINE bool is_zero(const Mat<D>& a) {
+RUBBLE_HD_SMALL bool is_zero(const Mat<D>& a) {
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j)
       if (a.m[i][j] != Real(0)) return false;
@@ -117,7 +117,7 @@ RUBBLE_HD_INLINE bool is_zero(const Mat<D>& a) {
 }
 
 template <int D>
-RUBBLE_HD_INLINE Real determinant(const Mat<D>& a) {
+RUBBLE_HD_SMALL Real determinant(const Mat<D>& a) {
   if constexpr (D == 1) return a.m[0][0];
   else if constexpr (D == 2) return a.m[0][0] * a.m[1][1] - a.m[0][1] * a.m[1][0];
   else
@@ -128,7 +128,7 @@ RUBBLE_HD_INLINE Real determinant(const Mat<D>& a) {
 
 // Inverse by the adjugate; the caller checks the determinant first.
 template <int D>
-RUBBLE_HD_INLINE Mat<D> inverse(const Mat<D>& a) {
+RUBBLE_HD_SMALL Mat<D> inverse(const Mat<D>& a) {
   const Real inv_det = Real(1) / determinant(a);
   Mat<D> r;
   if constexpr (D == 1) {
