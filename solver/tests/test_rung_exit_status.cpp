@@ -48,3 +48,14 @@ TEST(RecordMetadata, RunMetadataNamesBackendPrecisionAndCommit) {
       << s;
   EXPECT_NE(s.find("\"commit\": \""), std::string::npos) << s;
 }
+
+TEST(RecordMetadata, NumbersAreTheShortestTextThatReadsBackExactly) {
+  using rubble::verification::exact_number;
+  EXPECT_EQ(exact_number(45 + 19.8 / 2), "54.9");
+  EXPECT_EQ(exact_number(0.1), "0.1");
+  EXPECT_EQ(exact_number(1e-300), "1e-300");
+  for (double v : {0.44234849799999998, 1.0 / 3.0, 2.0 / 3.0 * 1e-7, 6.02214076e23, -0.0})
+    EXPECT_EQ(std::stod(exact_number(v)), v) << exact_number(v);
+  EXPECT_EQ(rubble::verification::Json(0.25).str(), "0.25");
+  EXPECT_EQ(rubble::verification::Json(std::nan("")).str(), "null");
+}

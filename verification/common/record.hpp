@@ -3,6 +3,7 @@
 // written by every rung and rendered by ci/report. Header-only, no
 // dependencies beyond rubble's Real: a tiny JSON writer is enough for flat
 // records.
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -30,15 +31,22 @@ inline std::string joined(const std::vector<std::string>& items) {
   return s;
 }
 
+// A number as the shortest text that reads back as the same double
+// (std::to_chars without a precision): scene overrides, the notes a rung
+// adds to a scene and record values read back exactly, and a report shows
+// 54.9, not the 54.899999999999999 of "%.17g".
+inline std::string exact_number(double v) {
+  char b[64];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
 // A JSON value built from nested maps/vectors, printed in key order.
 class Json {
  public:
   Json() : text_("null") {}
   Json(double v) {  // NOLINT: implicit on purpose
-    if (!std::isfinite(v)) { text_ = "null"; return; }
-    char b[40];
-    std::snprintf(b, sizeof b, "%.17g", v);
-    text_ = b;
+    text_ = std::isfinite(v) ? exact_number(v) : "null";
   }
   Json(int v) : text_(std::to_string(v)) {}
   Json(long v) : text_(std::to_string(v)) {}
@@ -90,13 +98,6 @@ class Json {
   std::string text_;
 };
 
-// A number as text with every digit a double holds ("%.17g"): scene
-// overrides and the notes a rung adds to a scene read back the same value.
-inline std::string exact_number(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
 
 // A pass/fail check with its threshold and where the threshold comes from.
 struct Check {
