@@ -533,6 +533,12 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
               "(end), %.2f deg (t = %.3f s); KE end/peak %.2e (peak at %.3f s); min pair %.3f dx; min x %.2e, min y %.2e\n",
               r.toe, r.x99, r.h_wall, r.surface_L1, r.fail_final.angle, r.fail_early.angle, r.t_early, r.ke_ratio,
               r.t_ke_peak, r.min_pair, r.min_x, r.min_y);
+  for (const auto& [when, line] : {std::pair<const char*, const Line*>{"at the end", &r.fail_final},
+                                   std::pair<const char*, const Line*>{"early", &r.fail_early}})
+    if (!std::isfinite(line->angle))
+      std::printf("  no failure line %s: %zu bins of width 2 dx hold a particle with eps_p > %g between 1.5 dx and "
+                  "H0 - 1.5 dx; a fit needs 3\n",
+                  when, line->x.size(), kEpsThreshold);
   std::printf("  tail: %.2f %% of the mass beyond the experiment's toe; median eps_v beyond x99 %.3f, behind it %.1e\n",
               100 * r.tail.mass_beyond_experiment, r.tail.eps_v_tail, r.tail.eps_v_bulk);
   if (!args.keep) std::filesystem::remove_all(out);
