@@ -36,7 +36,9 @@
 //     99 % of the mass lies;
 //   - the tail: the mass fraction beyond the experiment's toe, and the
 //     median inelastic volume strain eps_v (the tension-cracking opening)
-//     of the particles beyond x99 and behind it (deposit_tail);
+//     of the particles beyond x99 and behind it, and the fraction of the
+//     particles beyond x99 that started in the column's free face and in
+//     the lattice row behind it (deposit_tail);
 //   - final height H_inf at the back wall: the largest y + dx/2 of the free
 //     particles with x < 2 dx;
 //   - the free-surface profile h(x): the largest y + dx/2 in bins of 5 mm;
@@ -223,6 +225,7 @@ struct Frame {
   double t = 0;
   std::vector<double> x, y, eps;  // free particles
   std::vector<double> m, eps_v;    // eps_v: inelastic volume strain (0 when not stored)
+  std::vector<std::int32_t> id;    // generation index: the same particle in every frame
 };
 
 Frame read_frame(const std::filesystem::path& f) {
@@ -238,6 +241,7 @@ Frame read_frame(const std::filesystem::path& f) {
     fr.eps.push_back(ps.eps_p.empty() ? 0.0 : double(ps.eps_p[i]));
     fr.m.push_back(ps.m[i]);
     fr.eps_v.push_back(ps.eps_v.empty() ? 0.0 : double(ps.eps_v[i]));
+    fr.id.push_back(ps.id[i]);
   }
   return fr;
 }
@@ -304,9 +308,13 @@ double mass_quantile_x(const Frame& f, double q) {
 // eps_v (tension-cracking opening, particle_rates.hpp) of the particles
 // beyond x99 and of those behind it. A thin front that spreads opens at the
 // Drucker-Prager apex (p = 0: no friction) and keeps that opening: the
-// measure of how far the tail's particles have separated.
+// measure of how far the tail's particles have separated. Where the tail
+// comes from: the fraction of the particles beyond x99 that started in the
+// column's outermost lattice column (the free face, x > L0 - dx) and in the
+// one behind it (from_face[0], from_face[1]).
 struct Tail {
   double mass_beyond_experiment = NAN, eps_v_tail = NAN, eps_v_bulk = NAN;
+  double from_face[2] = {NAN, NAN};
 };
 
 double median(std::vector<double> v) {
@@ -315,18 +323,28 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-Tail deposit_tail(const Frame& f, double dx, double x99, double exp_toe) {
+Tail deposit_tail(const Frame& first, const Frame& f, double dx, double L0, double x99, double exp_toe) {
   Tail t;
+  std::map<std::int32_t, double> x_start;
+  for (std::size_t k = 0; k < first.x.size(); ++k) x_start[first.id[k]] = first.x[k];
   double mt = 0, mb = 0;
   std::vector<double> tail, bulk;
+  std::size_t face[2] = {0, 0};
   for (std::size_t k = 0; k < f.x.size(); ++k) {
     mt += f.m[k];
     if (f.x[k] + 0.5 * dx > exp_toe) mb += f.m[k];
     (f.x[k] > x99 ? tail : bulk).push_back(f.eps_v[k]);
+    if (f.x[k] > x99) {
+      const auto it = x_start.find(f.id[k]);
+      if (it == x_start.end()) throw std::runtime_error("a particle of the last snapshot is missing from the first");
+      const long row = long(std::floor((L0 - it->second) / dx));  // 0: the free face
+      if (row == 0 || row == 1) ++face[row];
+    }
   }
   t.mass_beyond_experiment = mb / mt;
   t.eps_v_tail = median(tail);
   t.eps_v_bulk = median(bulk);
+  for (int i = 0; i < 2; ++i) t.from_face[i] = tail.empty() ? NAN : double(face[i]) / double(tail.size());
   return t;
 }
 
@@ -468,9 +486,10 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
   const std::vector<double> shot_taus = {0, 1, 2, 3, 5};  // snapshots for the report (and the final one)
   std::size_t next_shot = 0;
   bool early_done = false;
-  Frame last;
+  Frame first, last;
   for (std::size_t i = 0; i < files.size(); ++i) {
     Frame f = read_frame(files[i]);
+    if (i == 0) first = f;
     r.free_particles = f.x.size();
     const double dmin = min_pair_distance(f, st.dx);
     if (dmin < r.min_pair) {
@@ -504,7 +523,7 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
 
   r.toe = toe_position(last, st.dx);
   r.x99 = mass_quantile_x(last, 0.99);
-  r.tail = deposit_tail(last, st.dx, r.x99, kExpSurfX.back());
+  r.tail = deposit_tail(first, last, st.dx, st.L0, r.x99, kExpSurfX.back());
   r.h_wall = height_at_wall(last, st.dx);
   surface_profile(last, st.dx, r.px, r.ph);
   double l1 = 0;
@@ -539,8 +558,10 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
       std::printf("  no failure line %s: %zu bins of width 2 dx hold a particle with eps_p > %g between 1.5 dx and "
                   "H0 - 1.5 dx; a fit needs 3\n",
                   when, line->x.size(), kEpsThreshold);
-  std::printf("  tail: %.2f %% of the mass beyond the experiment's toe; median eps_v beyond x99 %.3f, behind it %.1e\n",
-              100 * r.tail.mass_beyond_experiment, r.tail.eps_v_tail, r.tail.eps_v_bulk);
+  std::printf("  tail: %.2f %% of the mass beyond the experiment's toe; median eps_v beyond x99 %.3f, behind it %.1e; "
+              "of the particles beyond x99 %.0f %% started in the column's free face, %.0f %% in the row behind it\n",
+              100 * r.tail.mass_beyond_experiment, r.tail.eps_v_tail, r.tail.eps_v_bulk, 100 * r.tail.from_face[0],
+              100 * r.tail.from_face[1]);
   if (!args.keep) std::filesystem::remove_all(out);
   return r;
 }
@@ -720,6 +741,8 @@ int run_column(const Args& args) {
                                  {"mass_beyond_experiment", r.tail.mass_beyond_experiment},
                                  {"eps_v_median_beyond_x99", r.tail.eps_v_tail},
                                  {"eps_v_median_behind_x99", r.tail.eps_v_bulk},
+                                 {"beyond_x99_from_free_face", r.tail.from_face[0]},
+                                 {"beyond_x99_from_second_row", r.tail.from_face[1]},
                                  {"lube2005", r.st.L0 * (1 + lube_runout(r.st.a))},
                                  {"lajeunesse2005", r.st.L0 * (1 + lajeunesse_runout(r.st.a))}})},
         {"height_at_wall", Json::object({{"h", r.h_wall}, {"experiment", exp_h}})},
