@@ -98,7 +98,6 @@ class Json {
   std::string text_;
 };
 
-
 // A pass/fail check with its threshold and where the threshold comes from.
 struct Check {
   std::string name;
