@@ -58,7 +58,9 @@
 //     (clumping) and the smallest x and y of a free particle (a particle
 //     centre behind the back wall x = 0 or below the floor y = 0 has gone
 //     through it);
-//   - kinetic energy from conserved.csv: peak and final value.
+//   - kinetic energy from conserved.csv: peak and final value;
+//   - for the report (finest resolution): eps_p at t = 0, 1, 2, 3, 5 tau and
+//     at the end, as a raster of cells (eps_raster).
 // Checks: see check_column(); thresholds from issue #12 (items 6, 7).
 #include <algorithm>
 #include <cmath>
@@ -433,6 +435,43 @@ double fit_angle(const std::vector<double>& x, const std::vector<double>& y) {
 }
 
 // ---- one run -----------------------------------------------------------------
+// A picture of a frame for the report: eps_p on a grid of square cells of
+// side max(dx, H0/50), each cell the value of the free particle nearest its
+// centre within 0.8 dx (null where there is none: outside the material, or
+// where particles have separated), rounded to 1e-3. A grid rather than the
+// particles themselves keeps the record small at every resolution, and a
+// regular subsample of a lattice (what the record held before) drew moire
+// stripes. Row-major from (x0, y0), the lower-left corner: value j*nx + i
+// covers [x0 + i cell, x0 + (i+1) cell] x [y0 + j cell, y0 + (j+1) cell].
+Json eps_raster(const Frame& f, double dx, double H0) {
+  const double cell = std::max(dx, H0 / 50.0);
+  const double reach = 0.8 * dx;
+  const double x0 = *std::min_element(f.x.begin(), f.x.end()) - reach;
+  const double y0 = *std::min_element(f.y.begin(), f.y.end()) - reach;
+  const double x1 = *std::max_element(f.x.begin(), f.x.end()) + reach;
+  const double y1 = *std::max_element(f.y.begin(), f.y.end()) + reach;
+  const long nx = std::max(1L, long(std::ceil((x1 - x0) / cell)));
+  const long ny = std::max(1L, long(std::ceil((y1 - y0) / cell)));
+  std::vector<double> value(std::size_t(nx * ny), NAN), best(std::size_t(nx * ny), reach * reach);
+  for (std::size_t k = 0; k < f.x.size(); ++k) {
+    const long i0 = std::max(0L, long(std::floor((f.x[k] - reach - x0) / cell)));
+    const long i1 = std::min(nx - 1, long(std::floor((f.x[k] + reach - x0) / cell)));
+    const long j0 = std::max(0L, long(std::floor((f.y[k] - reach - y0) / cell)));
+    const long j1 = std::min(ny - 1, long(std::floor((f.y[k] + reach - y0) / cell)));
+    for (long j = j0; j <= j1; ++j)
+      for (long i = i0; i <= i1; ++i) {
+        const double ddx = x0 + (i + 0.5) * cell - f.x[k], ddy = y0 + (j + 0.5) * cell - f.y[k];
+        const double d2 = ddx * ddx + ddy * ddy;
+        const std::size_t c = std::size_t(j * nx + i);
+        if (d2 < best[c]) {
+          best[c] = d2;
+          value[c] = std::round(f.eps[k] * 1e3) / 1e3;
+        }
+      }
+  }
+  return Json::object({{"x0", x0}, {"y0", y0}, {"cell", cell}, {"nx", nx}, {"ny", ny}, {"eps_p", value}});
+}
+
 struct Result {
   Setup st;
   double n = 0;
@@ -506,15 +545,7 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
     }
     const bool final_frame = i + 1 == files.size();
     if (keep_shots && ((next_shot < shot_taus.size() && f.t >= shot_taus[next_shot] * st.tau - 1e-9) || final_frame)) {
-      // at most ~4000 particles per picture (record size)
-      const std::size_t stride = std::max<std::size_t>(1, f.x.size() / 4000 + 1);
-      std::vector<double> sx, sy, se;
-      for (std::size_t k = 0; k < f.x.size(); k += stride) {
-        sx.push_back(f.x[k]);
-        sy.push_back(f.y[k]);
-        se.push_back(f.eps[k]);
-      }
-      r.shots.push_back(Json::object({{"t", f.t}, {"x", sx}, {"y", sy}, {"eps_p", se}}));
+      r.shots.push_back(Json::object({{"t", f.t}, {"raster", eps_raster(f, st.dx, st.H0)}}));
       while (next_shot < shot_taus.size() && f.t >= shot_taus[next_shot] * st.tau - 1e-9) ++next_shot;
     }
     if (final_frame) last = std::move(f);

@@ -1,7 +1,8 @@
 """Extra report plots for the granular column collapse rung (called by ci/report).
 
 Column cases (records with "snapshots"/"profile"): the collapse at several
-times coloured by the accumulated plastic strain eps_p (finest resolution),
+times coloured by the accumulated plastic strain eps_p (finest resolution;
+the rung's raster of each snapshot),
 the final free-surface profiles of every resolution over the experimental
 profile and failure line of Bui et al. 2008 (as digitised, see the records'
 reference_sources) with the fitted failure lines, and the kinetic-energy
@@ -16,6 +17,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def _lube(a):
@@ -26,32 +28,63 @@ def _lajeunesse(a):
     return 1.8 * a if a < 3.0 else 2.3 * a ** (2.0 / 3.0)
 
 
+def _eps_values(s):
+    """eps_p of a snapshot as a list of finite values (for the colour scale)."""
+    if "raster" in s:
+        return [v for v in s["raster"]["eps_p"] if v is not None]
+    return list(s["eps_p"])
+
+
+def _snapshot_plot(case, rec, out_dir):
+    """The collapse at the recorded times, coloured by eps_p: the rung's
+    raster (cells of max(dx, H0/50), empty outside the material) where the
+    record has one, else the particle subsample of older records."""
+    shots = rec["snapshots"]
+    n = len(shots)
+    x_ends = [s["raster"]["x0"] + s["raster"]["nx"] * s["raster"]["cell"] for s in shots if "raster" in s]
+    x_max = max([0.5, rec["runout"]["toe"] + 0.02] + x_ends)
+    y_max = 0.11 * rec["H0"] / 0.1
+    panel_h = 7.6 * (y_max + 0.005) / (x_max + 0.01)  # equal aspect over a 7.6 in wide panel
+    fig, axes = plt.subplots(n, 1, figsize=(9, n * (panel_h + 0.25) + 1.1), squeeze=False, sharex=True,
+                             layout="constrained")
+    vmax = min(3.0, max([1.0] + [max(_eps_values(s), default=0.0) for s in shots]))
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="white")
+    im = None
+    for ax, s in zip(axes[:, 0], shots):
+        if "raster" in s:
+            g = s["raster"]
+            nx, ny, c = g["nx"], g["ny"], g["cell"]
+            vals = np.array([np.nan if v is None else v for v in g["eps_p"]], dtype=float).reshape(ny, nx)
+            im = ax.imshow(np.ma.masked_invalid(vals), origin="lower", interpolation="nearest", cmap=cmap,
+                           vmin=0.0, vmax=vmax,
+                           extent=(g["x0"], g["x0"] + nx * c, g["y0"], g["y0"] + ny * c))
+        else:
+            im = ax.scatter(s["x"], s["y"], c=s["eps_p"], s=0.6, cmap="viridis", vmin=0.0, vmax=vmax)
+        # the floor and the back wall (the raster reaches 0.8 dx beyond the particles)
+        ax.axhspan(-0.005, 0.0, color="0.6", zorder=3)
+        ax.axvspan(-0.01, 0.0, color="0.6", zorder=3)
+        ax.set_aspect("equal")
+        ax.set_xlim(-0.01, x_max)
+        ax.set_ylim(-0.005, y_max)
+        ax.text(0.99, 0.85, f"t = {s['t']:.3f} s", transform=ax.transAxes, ha="right", fontsize=8)
+        ax.set_ylabel("y [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[-1, 0].set_xlabel("x [m]")
+    fig.colorbar(im, ax=axes[:, 0].tolist(), orientation="horizontal", fraction=0.04, aspect=50,
+                 label="accumulated plastic strain $\\varepsilon_p$ (clipped at %.1f)" % vmax)
+    fig.suptitle(f"column collapse ({case}), H0/dx = {rec['resolution']:g}", fontsize=10)
+    name = f"granular_column_collapse-{case}-snapshots.png"
+    fig.savefig(out_dir / name, dpi=110)
+    plt.close(fig)
+    return (f"collapse coloured by eps_p, H0/dx = {rec['resolution']:g}", name)
+
+
 def _column_plots(case, recs, out_dir):
     images = []
     recs = sorted(recs, key=lambda r: r["resolution"])
     shots_rec = next((r for r in reversed(recs) if r.get("snapshots")), None)
     if shots_rec:
-        shots = shots_rec["snapshots"]
-        n = len(shots)
-        fig, axes = plt.subplots(n, 1, figsize=(9, 1.45 * n + 0.6), squeeze=False, sharex=True)
-        vmax = max(1.0, max(max(s["eps_p"]) for s in shots if s["eps_p"]))
-        vmax = min(vmax, 3.0)
-        sc = None
-        for ax, s in zip(axes[:, 0], shots):
-            sc = ax.scatter(s["x"], s["y"], c=s["eps_p"], s=0.6, cmap="viridis", vmin=0.0, vmax=vmax)
-            ax.set_aspect("equal")
-            ax.set_xlim(-0.01, max(0.5, shots_rec["runout"]["toe"] + 0.02))
-            ax.set_ylim(-0.005, 0.11 * shots_rec["H0"] / 0.1)
-            ax.text(0.99, 0.85, f"t = {s['t']:.3f} s", transform=ax.transAxes, ha="right", fontsize=8)
-            ax.set_ylabel("y [m]", fontsize=8)
-            ax.tick_params(labelsize=7)
-        axes[-1, 0].set_xlabel("x [m]")
-        fig.colorbar(sc, ax=axes[:, 0].tolist(), shrink=0.8, label="$\\varepsilon_p$ (clipped at %.1f)" % vmax)
-        fig.suptitle(f"column collapse ({case}), H0/dx = {shots_rec['resolution']:g}", fontsize=10)
-        name = f"granular_column_collapse-{case}-snapshots.png"
-        fig.savefig(out_dir / name, dpi=110)
-        plt.close(fig)
-        images.append((f"collapse coloured by eps_p, H0/dx = {shots_rec['resolution']:g}", name))
+        images.append(_snapshot_plot(case, shots_rec, out_dir))
 
     fig, ax = plt.subplots(figsize=(9, 3.6))
     ref = recs[-1]
