@@ -106,6 +106,9 @@ const std::vector<double> kExpSurfY = {0.099231753, 0.099281704, 0.095872045, 0.
                                        0.072232212, 0.066513816, 0.061565666, 0.053924154, 0.047436512, 0.042488361,
                                        0.034848848, 0.030672941, 0.026493037, 0.021544886, 0.018903475, 0.013570701,
                                        0.010929289, 0.007904254, 0.00372435,  0.002236808, 0.001519511};
+// The experiment's column (Bui et al. 2008; issue #12 item 6): 0.2 m long,
+// 0.1 m high, a = 0.5: its point on the aspect sweep's plot.
+constexpr double kExpL0 = 0.2, kExpH0 = 0.1;
 const std::vector<double> kExpFailX = {0.021159264, 0.039792004, 0.059974225, 0.079727867, 0.099904094,
                                        0.119636756, 0.139420368, 0.159560631, 0.179353234};
 const std::vector<double> kExpFailY = {0.098901077, 0.090102699, 0.080154449, 0.065205099, 0.054487602,
@@ -870,6 +873,13 @@ int run_aspect(const Args& args) {
   }
   double wsum = 0;
   for (double w : wall) wsum += w;
+  // the experiment's own point, beside the laws: the aluminium bars of Bui et
+  // al. at a = 0.5 (the laws were fitted to other granular materials)
+  const double exp_a = kExpH0 / kExpL0, exp_runout = (kExpSurfX.back() - kExpL0) / kExpL0;
+  const double exp_height = kExpSurfY.front() / kExpL0;
+  std::printf("  experiment (Bui et al. 2008, a = %g): (L - L0)/L0 = %.3f (Lube 2005 %.3f, Lajeunesse 2005 %.3f), "
+              "H/L0 = %.3f\n",
+              exp_a, exp_runout, lube_runout(exp_a), lajeunesse_runout(exp_a), exp_height);
   std::printf("aspect sweep: fitted (L - L0)/L0 ~ a^%.3f, H/L0 ~ a^%.3f; largest deviation from Lube 2005 %.1f %%, "
               "from Lajeunesse 2005 %.1f %%; wall %.1f s\n",
               slope_runout, slope_height, 100 * max_dev_lube, 100 * max_dev_laj, wsum);
@@ -895,8 +905,12 @@ int run_aspect(const Args& args) {
                               {"lajeunesse2005", laj},
                               {"slope_runout", slope_runout},
                               {"slope_height", slope_height},
-                              {"runs", Json::array(per)}})},
-      {"reference_sources", Json::object({{"lube2005", kLubeSource}, {"lajeunesse2005", kLajSource}})},
+                              {"runs", Json::array(per)},
+                              {"experiment", Json::object({{"a", exp_a},
+                                                           {"normalised_runout", exp_runout},
+                                                           {"normalised_height", exp_height}})}})},
+      {"reference_sources", Json::object({{"lube2005", kLubeSource}, {"lajeunesse2005", kLajSource},
+                                          {"experiment", kExpSource}})},
   });
   rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" +
                                                        rubble::verification::exact_number(args.resolution) + "-cpu", record, rubble::backend_name(rubble::default_backend()));

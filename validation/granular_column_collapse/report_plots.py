@@ -149,6 +149,10 @@ def _sweep_plots(case, recs, out_dir):
         ax[0].loglog(aa, [_lube(x) for x in aa], "k--", lw=0.9, label="Lube et al. 2005 (1.2a; 1.9a^(2/3))")
         ax[0].loglog(aa, [_lajeunesse(x) for x in aa], "k:", lw=0.9,
                      label="Lajeunesse et al. 2005 (1.8a; 2.3a^(2/3))")
+        e = s.get("experiment")
+        if e:  # the aluminium bars of Bui et al. 2008 at a = 0.5 (the laws are fits to other materials)
+            ax[0].loglog([e["a"]], [e["normalised_runout"]], "k*", ms=10,
+                         label="Bui et al. 2008 experiment (aluminium bars, digitised)")
         ax[0].set_xlim(0.3, 8)
         ax[0].set_xlabel("a = H0/L0")
         ax[0].set_ylabel("(L_inf - L0)/L0")
@@ -158,6 +162,8 @@ def _sweep_plots(case, recs, out_dir):
         c = sum(ly) / len(ly) - s["slope_height"] * sum(la) / len(la)
         ax[1].loglog(aa, [math.exp(c) * x ** s["slope_height"] for x in aa], "C0-", lw=0.8)
         ax[1].loglog(aa, aa, "k--", lw=0.6, label="H_inf = H0 (no collapse)")
+        if e:
+            ax[1].loglog([e["a"]], [e["normalised_height"]], "k*", ms=10, label="Bui et al. 2008 experiment")
         ax[1].set_xlim(0.3, 8)
         ax[1].set_xlabel("a = H0/L0")
         ax[1].set_ylabel("H_inf/L0")
