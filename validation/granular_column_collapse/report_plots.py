@@ -17,6 +17,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
 
@@ -168,6 +169,10 @@ def _sweep_plots(case, recs, out_dir):
         ax[1].set_xlabel("a = H0/L0")
         ax[1].set_ylabel("H_inf/L0")
         ax[1].legend(fontsize=7)
+        for axis in ax:  # ticks at the swept ratios, no crowded minor labels
+            axis.set_xticks([0.5, 1, 2, 4])
+            axis.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+            axis.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         fig.suptitle(f"aspect-ratio sweep ({case}), dx = {r['dx']:g} m (laws as quoted by secondary sources)",
                      fontsize=10)
         fig.tight_layout()
