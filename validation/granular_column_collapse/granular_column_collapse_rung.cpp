@@ -43,7 +43,14 @@
 //     particles with x < 2 dx;
 //   - the free-surface profile h(x): the largest y + dx/2 in bins of 5 mm;
 //     its L1 distance to the experimental profile (mean over the digitised
-//     points, h = 0 beyond the toe);
+//     points, h = 0 beyond the toe), and how far it moved from the previous
+//     resolution (the same mean of |h_n - h_prev|);
+//   - the front at thickness h = 0.02, 0.05, 0.1, 0.2 H0: where the profile,
+//     followed out from the back wall, first falls below h (front_at; NaN
+//     where h < dx), beside the experiment's profile at the same h. The toe
+//     ends a sheet one or two particles thick that lengthens as dx shrinks;
+//     the front at a resolved thickness says whether the rest of the
+//     deposit converges and how it lies against the experiment;
 //   - the failure line from eps_p: in bins of width 2 dx (x >= 2 dx), the
 //     lowest y - dx/2 of a particle with eps_p > 0.1 (10 % equivalent
 //     plastic strain): the lower edge of the yielded material, i.e. the top
@@ -129,6 +136,13 @@ double lube_runout(double a) { return a <= 1.8 ? 1.2 * a : 1.9 * std::pow(a, 2.0
 double lajeunesse_runout(double a) { return a < 3.0 ? 1.8 * a : 2.3 * std::pow(a, 2.0 / 3.0); }
 
 constexpr double kEpsThreshold = 0.1;                          // eps_p of the failure line
+// Thicknesses, as fractions of H0, at which the deposit's front is measured
+// beside the toe (front_at): the toe is the end of a sheet one or two
+// particles thick whose length follows dx; the front at a thickness that
+// every resolution resolves with at least one particle layer asks whether
+// the rest of the deposit converges and where it lies against the
+// experiment's profile. NaN where h is below dx (thinner than one layer).
+const std::vector<double> kFrontThickness = {0.02, 0.05, 0.1, 0.2};
 const std::vector<double> kEpsSensitivity = {0.02, 0.05, 0.2};  // recorded beside it
 
 // ---- arguments -------------------------------------------------------------
@@ -379,6 +393,21 @@ void surface_profile(const Frame& f, double dx, std::vector<double>& px, std::ve
 }
 
 // Height of the simulated profile at x (linear between bin centres; 0 beyond the toe).
+// The front at thickness h: walking out from the back wall along a profile
+// (bin centres px, heights ph), the first place where it falls below h,
+// linear between the last bin at or above h and the first below it; NaN
+// where the profile starts below h or never falls below it. The first
+// crossing, so that isolated particles beyond the deposit do not count.
+double front_at(const std::vector<double>& px, const std::vector<double>& ph, double h) {
+  if (px.empty() || ph.front() < h) return NAN;
+  for (std::size_t i = 1; i < px.size(); ++i)
+    if (ph[i] < h) return px[i - 1] + (px[i] - px[i - 1]) * (ph[i - 1] - h) / (ph[i - 1] - ph[i]);
+  return NAN;
+}
+
+// The record's name for the front at thickness f H0.
+std::string front_key(double f) { return "front_" + rubble::verification::exact_number(f) + "H0"; }
+
 double profile_at(const std::vector<double>& px, const std::vector<double>& ph, double toe, double x) {
   if (px.empty() || x >= toe) return 0;
   if (x <= px.front()) return ph.front();
@@ -486,6 +515,7 @@ struct Result {
   Tail tail;
   std::vector<double> px, ph;
   double surface_L1 = NAN;
+  std::vector<double> front;  // x of the front at kFrontThickness * H0 (NaN below dx)
   Line fail_final, fail_early;
   double t_early = NAN;
   std::vector<double> sens_final, sens_early;  // angles at kEpsSensitivity
@@ -564,6 +594,8 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
   for (std::size_t i = 0; i < kExpSurfX.size(); ++i)
     l1 += std::fabs(profile_at(r.px, r.ph, r.toe, kExpSurfX[i]) - kExpSurfY[i]);
   r.surface_L1 = l1 / double(kExpSurfX.size());
+  for (double f : kFrontThickness)
+    r.front.push_back(f * st.H0 < st.dx ? NAN : front_at(r.px, r.ph, f * st.H0));
   r.fail_final = failure_line(last, st.dx, st.H0, kEpsThreshold);
   for (double thr : kEpsSensitivity) r.sens_final.push_back(failure_line(last, st.dx, st.H0, thr).angle);
 
@@ -672,6 +704,8 @@ int run_column(const Args& args) {
   const double exp_angle = fit_angle(kExpFailX, kExpFailY);
   const double phi = base.materials[std::size_t(cb.material_id)].plasticity.friction_angle;
   const double rankine = 45 + phi / 2;
+  std::vector<double> exp_front;  // the experiment's front at kFrontThickness * H0
+  for (double f : kFrontThickness) exp_front.push_back(front_at(kExpSurfX, kExpSurfY, f * kExpH0));
   std::printf("column %g x %g m; reference: experimental toe %.4f m, height at the wall %.4f m, failure line %.2f deg "
               "(fit through the digitised points); Rankine 45 + phi/2 = %.2f deg\n",
               L0, H0, exp_toe, exp_h, exp_angle, rankine);
@@ -696,11 +730,15 @@ int run_column(const Args& args) {
     const auto& a = res[res.size() - 3];
     const auto& b = res[res.size() - 2];
     const auto& c = res[res.size() - 1];
-    orders = Json::object({{"runout", observed_order3(a.n, b.n, c.n, a.toe, b.toe, c.toe)},
+    std::vector<std::pair<std::string, Json>> o = {{"runout", observed_order3(a.n, b.n, c.n, a.toe, b.toe, c.toe)},
                            {"height_at_wall", observed_order3(a.n, b.n, c.n, a.h_wall, b.h_wall, c.h_wall)},
                            {"failure_angle_end", observed_order3(a.n, b.n, c.n, a.fail_final.angle, b.fail_final.angle,
                                                                  c.fail_final.angle)},
-                           {"x99", observed_order3(a.n, b.n, c.n, a.x99, b.x99, c.x99)}});
+                           {"x99", observed_order3(a.n, b.n, c.n, a.x99, b.x99, c.x99)}};
+    for (std::size_t k = 0; k < kFrontThickness.size(); ++k)
+      o.emplace_back(front_key(kFrontThickness[k]),
+                     observed_order3(a.n, b.n, c.n, a.front[k], b.front[k], c.front[k]));
+    orders = Json::object(o);
   }
   for (std::size_t i = 0; i < res.size(); ++i) {
     const Result& r = res[i];
@@ -741,6 +779,29 @@ int run_column(const Args& args) {
     }
     std::vector<double> hx_sim;
     for (double x : kExpSurfX) hx_sim.push_back(profile_at(r.px, r.ph, r.toe, x));
+    // how far the free surface moved from the previous resolution: the mean
+    // |h_n(x) - h_prev(x)| over the experiment's digitised x (NaN for the first)
+    double surface_change = NAN;
+    if (i >= 1) {
+      const Result& p = res[i - 1];
+      surface_change = 0;
+      for (double x : kExpSurfX)
+        surface_change += std::fabs(profile_at(r.px, r.ph, r.toe, x) - profile_at(p.px, p.ph, p.toe, x));
+      surface_change /= double(kExpSurfX.size());
+    }
+    std::vector<std::pair<std::string, Json>> errors = {
+        {"runout", Json::object({{"rel", std::fabs(r.toe - exp_toe) / exp_toe}})},
+        {"height", Json::object({{"rel", std::fabs(r.h_wall - exp_h) / exp_h}})},
+        {"surface", Json::object({{"L1", r.surface_L1}})},
+        {"failure_angle", Json::object({{"abs", std::fabs(r.fail_final.angle - exp_angle)}})}};
+    std::vector<double> front_rel;
+    for (std::size_t k = 0; k < kFrontThickness.size(); ++k) {
+      front_rel.push_back(std::fabs(r.front[k] - exp_front[k]) / exp_front[k]);
+      errors.emplace_back(front_key(kFrontThickness[k]), Json::object({{"rel", front_rel.back()}}));
+      std::printf("  n = %g front at h = %g H0: %.4f m (experiment %.4f m, rel %.3f)\n", r.n, kFrontThickness[k],
+                  r.front[k], exp_front[k], front_rel.back());
+    }
+    if (i >= 1) std::printf("  n = %g surface change from the previous resolution: %.2e m (mean |dh|)\n", r.n, surface_change);
     const Json record = Json::object({
         {"rung", "granular_column_collapse"},
         {"case", args.label},
@@ -750,10 +811,7 @@ int run_column(const Args& args) {
         {"dimension", 2},
         {"parameters", common_parameters(base, args)},
         {"units", Json::object({{"x", "m"}, {"h", "m"}, {"runout", "m"}, {"height", "m"}, {"surface", "m"}})},
-        {"errors", Json::object({{"runout", Json::object({{"rel", std::fabs(r.toe - exp_toe) / exp_toe}})},
-                                 {"height", Json::object({{"rel", std::fabs(r.h_wall - exp_h) / exp_h}})},
-                                 {"surface", Json::object({{"L1", r.surface_L1}})},
-                                 {"failure_angle", Json::object({{"abs", std::fabs(r.fail_final.angle - exp_angle)}})}})},
+        {"errors", Json::object(errors)},
         {"observed_order", finest ? orders : Json::object({})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
@@ -792,6 +850,11 @@ int run_column(const Args& args) {
                                        {"experiment_y", kExpFailY},
                                        {"rankine", rankine}})},
         {"surface_at_experiment_x", hx_sim},
+        {"surface_change_from_previous", surface_change},
+        {"front", Json::object({{"thickness_over_H0", kFrontThickness},
+                                {"x", r.front},
+                                {"experiment", exp_front},
+                                {"rel", front_rel}})},
         {"kinetic", Json::object({{"peak", r.ke_peak}, {"t_peak", r.t_ke_peak}, {"final", r.ke_final},
                                   {"ratio", r.ke_ratio}, {"t", r.et}, {"ke", r.ek}})},
         {"clumping", Json::object({{"min_pair_over_dx", r.min_pair}, {"t", r.t_min_pair}})},
