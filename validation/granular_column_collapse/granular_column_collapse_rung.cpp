@@ -138,10 +138,10 @@ double lajeunesse_runout(double a) { return a < 3.0 ? 1.8 * a : 2.3 * std::pow(a
 constexpr double kEpsThreshold = 0.1;                          // eps_p of the failure line
 // Thicknesses, as fractions of H0, at which the deposit's front is measured
 // beside the toe (front_at): the toe is the end of a sheet one or two
-// particles thick whose length follows dx; the front at a thickness that
-// every resolution resolves with at least one particle layer asks whether
-// the rest of the deposit converges and where it lies against the
-// experiment's profile. NaN where h is below dx (thinner than one layer).
+// particles thick whose length follows dx; the front at a thickness of at
+// least one particle layer asks whether the rest of the deposit converges
+// and where it lies against the experiment's profile. NaN where h is below
+// dx (thinner than one layer: 0.02 H0 at n < 50).
 const std::vector<double> kFrontThickness = {0.02, 0.05, 0.1, 0.2};
 const std::vector<double> kEpsSensitivity = {0.02, 0.05, 0.2};  // recorded beside it
 
@@ -392,7 +392,6 @@ void surface_profile(const Frame& f, double dx, std::vector<double>& px, std::ve
   }
 }
 
-// Height of the simulated profile at x (linear between bin centres; 0 beyond the toe).
 // The front at thickness h: walking out from the back wall along a profile
 // (bin centres px, heights ph), the first place where it falls below h,
 // linear between the last bin at or above h and the first below it; NaN
@@ -408,6 +407,7 @@ double front_at(const std::vector<double>& px, const std::vector<double>& ph, do
 // The record's name for the front at thickness f H0.
 std::string front_key(double f) { return "front_" + rubble::verification::exact_number(f) + "H0"; }
 
+// Height of the simulated profile at x (linear between bin centres; 0 beyond the toe).
 double profile_at(const std::vector<double>& px, const std::vector<double>& ph, double toe, double x) {
   if (px.empty() || x >= toe) return 0;
   if (x <= px.front()) return ph.front();
