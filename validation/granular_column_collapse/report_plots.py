@@ -146,7 +146,9 @@ def _column_plots(case, recs, out_dir):
     name = f"granular_column_collapse-{case}-front.png"
     fig.savefig(out_dir / name, dpi=110)
     plt.close(fig)
-    images.append(("the front magnified: where the surface first falls below 0.02, 0.05, 0.1, 0.2 H0", name))
+    levels = (", ".join(f"{f:g}" for f in fr["thickness_over_H0"]) + " H0") if fr else \
+        "a thickness (not in this older record)"
+    images.append((f"the front magnified: where the surface first falls below {levels}", name))
 
     fig, ax = plt.subplots(figsize=(6, 3.4))
     for r in recs:
