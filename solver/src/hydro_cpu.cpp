@@ -55,9 +55,12 @@ PorosityParams porosity_params_from_config(const PorosityConfig& c) {
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   switch (c.model) {
     case PlasticityType::VonMises: return von_mises_params(Real(c.yield_stress));
-    case PlasticityType::DruckerPrager:
-      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle),
-                                   c.cone == ConeFit::Compression ? DpConeFit::Compression : DpConeFit::PlaneStrain);
+    case PlasticityType::DruckerPrager: {
+      const DpConeFit fit = c.cone == ConeFit::Compression ? DpConeFit::Compression
+                            : c.cone == ConeFit::Extension ? DpConeFit::Extension
+                                                           : DpConeFit::PlaneStrain;
+      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle), fit);
+    }
     case PlasticityType::None:
     default: return PlasticityParams{};
   }

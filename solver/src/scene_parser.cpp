@@ -858,7 +858,9 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
       c.dilatancy_angle = *x;
     }
     c.cone = choice(q, "cone", qp, ConeFit::PlaneStrain,
-                    {{"plane_strain", ConeFit::PlaneStrain}, {"compression", ConeFit::Compression}});
+                    {{"plane_strain", ConeFit::PlaneStrain},
+                     {"compression", ConeFit::Compression},
+                     {"extension", ConeFit::Extension}});
   }
   if (!(m.shear_modulus > 0))
     fail(qp, "plasticity acts on solids only; give the material a shear_modulus > 0 (a fluid has no deviatoric stress)");

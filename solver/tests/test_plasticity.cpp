@@ -131,6 +131,13 @@ TEST(PlasticityConstants, Phi19_8BothFits) {
   EXPECT_EQ(cp.alpha_psi, 0.0);
   EXPECT_NEAR(cp.alpha_phi / ps.alpha_phi, 1.326336, 1e-6);
   EXPECT_NEAR(cp.k_c / ps.k_c, 1.326336, 1e-6);
+  // the extension (inner 3-D) cone: 2 s/(sqrt(3)(3 + s)) and 6 c cos/(sqrt(3)(3 + s))
+  const PlasticityParams ex = drucker_prager_params(19.8, c, 0, DpConeFit::Extension);
+  EXPECT_NEAR(ex.alpha_phi, 2 * s / (kSqrt3 * (3 + s)), 1e-15);
+  EXPECT_NEAR(ex.alpha_phi, 0.117152, 1e-6);
+  EXPECT_NEAR(ex.k_c / c, 0.976209, 1e-6);
+  EXPECT_NEAR(ex.alpha_phi / ps.alpha_phi, 1.057204, 1e-6);
+  EXPECT_NEAR(ex.k_c / ex.alpha_phi, 3 * c * co / s, 1e-9 * c);
   // common apex I1 = k_c/alpha_phi = 3 c cot(phi)
   EXPECT_NEAR(ps.k_c / ps.alpha_phi, 3 * c * co / s, 1e-9 * c);
   EXPECT_NEAR(cp.k_c / cp.alpha_phi, 3 * c * co / s, 1e-9 * c);
@@ -175,6 +182,46 @@ TEST(PlasticityConstants, PlaneStrainFitIsMohrCoulombInPlaneStrain) {
             << "phi " << phi_deg << " p " << p;
       }
     }
+  }
+}
+
+// What the two 3-D fits mean: each cone passes through one meridian of the
+// Mohr–Coulomb pyramid. With sigma_1 >= sigma_2 >= sigma_3 the principal
+// compressive stresses, Mohr–Coulomb reads
+//   sigma_1 = sigma_3 (1 + sin phi)/(1 - sin phi) + 2 c cos(phi)/(1 - sin phi).
+// Triaxial compression (sigma_2 = sigma_3, one major stress) lies on the
+// compression cone, triaxial extension (sigma_1 = sigma_2, two major
+// stresses) on the extension cone; uniaxial tension (the tensile strength
+// 2 c cos/(1 + sin)) and equal biaxial compression are extension states. Each
+// cone misses the other meridian by a finite amount (checked, so the test
+// tells the fits apart). Tolerance 1e-12 relative: pure rounding.
+TEST(PlasticityConstants, ThreeDFitsAreMohrCoulombOnTheirMeridians) {
+  for (double phi_deg : {10.0, 19.8, 35.0}) {
+    const double c = 3.0e4, phi = phi_deg * kPi / 180, s = std::sin(phi);
+    const PlasticityParams comp = drucker_prager_params(phi_deg, c, 0, DpConeFit::Compression);
+    const PlasticityParams ext = drucker_prager_params(phi_deg, c, 0, DpConeFit::Extension);
+    // f of the principal stress state (compression positive) sig_a, sig_b, sig_b
+    auto f_of = [](const PlasticityParams& pp, double sig_a, double sig_b) {
+      const double p = (sig_a + 2 * sig_b) / 3;
+      Mat<3> S = Mat<3>::zero();
+      S.m[0][0] = -(sig_a - p);
+      S.m[1][1] = S.m[2][2] = -(sig_b - p);
+      return yield_function<3>(pp, S, p);
+    };
+    for (double sigma_3 : {-0.5 * c * std::cos(phi) / (1 + s), 0.0, 2.0 * c, 40.0 * c}) {
+      const double sigma_1 = (sigma_3 * (1 + s) + 2 * c * std::cos(phi)) / (1 - s);
+      const double scale = c + sigma_1;
+      // triaxial compression: the major stress alone on axis a
+      EXPECT_NEAR(f_of(comp, sigma_1, sigma_3), 0, 1e-12 * scale) << "phi " << phi_deg << " s3 " << sigma_3;
+      EXPECT_GT(f_of(ext, sigma_1, sigma_3), 1e-3 * scale);  // the inner cone has yielded there already
+      // triaxial extension: the minor stress alone on axis a
+      EXPECT_NEAR(f_of(ext, sigma_3, sigma_1), 0, 1e-12 * scale) << "phi " << phi_deg << " s3 " << sigma_3;
+      EXPECT_LT(f_of(comp, sigma_3, sigma_1), -1e-3 * scale);  // the outer cone has strength to spare there
+    }
+    // the named extension states: uniaxial tension, equal biaxial compression
+    const double sigma_t = 2 * c * std::cos(phi) / (1 + s), sigma_b = 2 * c * std::cos(phi) / (1 - s);
+    EXPECT_NEAR(f_of(ext, -sigma_t, 0.0), 0, 1e-12 * sigma_b);
+    EXPECT_NEAR(f_of(ext, 0.0, sigma_b), 0, 1e-12 * sigma_b);
   }
 }
 
@@ -392,7 +439,7 @@ TEST(PlasticOnset, PlaneStrainUniaxialStress2D) { check_uniaxial_stress_onset<2>
 // it leaves p unchanged).
 template <int D>
 void check_apex() {
-  for (DpConeFit fit : {DpConeFit::PlaneStrain, DpConeFit::Compression}) {
+  for (DpConeFit fit : {DpConeFit::PlaneStrain, DpConeFit::Compression, DpConeFit::Extension}) {
     for (double psi : {0.0, 10.0}) {
       const PlasticityParams pp = drucker_prager_params(19.8, 2.0e5, psi, fit);
       const double pa = dp_apex_pressure(pp);
@@ -540,7 +587,7 @@ template <int D>
 void check_dilatancy() {
   std::mt19937 gen(11);
   std::uniform_real_distribution<double> U(-1, 1);
-  for (DpConeFit fit : {DpConeFit::PlaneStrain, DpConeFit::Compression}) {
+  for (DpConeFit fit : {DpConeFit::PlaneStrain, DpConeFit::Compression, DpConeFit::Extension}) {
     const PlasticityParams p0 = drucker_prager_params(25.0, 5.0e4, 0.0, fit);
     int tested0 = 0, testedpsi = 0;
     for (int k = 0; k < 200; ++k) {

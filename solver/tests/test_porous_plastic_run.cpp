@@ -21,6 +21,7 @@
 
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/material_params.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
 #include "rubble/run.hpp"
@@ -225,6 +226,23 @@ TEST(PlasticityScene, KeysAreReadWithDefaults) {
   for (const char* name : {"aluminium_bars", "phobos_regolith"}) {
     const MaterialConfig m = load_material(name);
     EXPECT_EQ(m.plasticity.model, PlasticityType::DruckerPrager) << name;
+  }
+}
+
+// Each cone name reaches the run as its fit's constants (plasticity.hpp).
+TEST(PlasticityScene, ConeNamesSelectTheirFit) {
+  struct Case { const char* name; ConeFit cone; DpConeFit fit; };
+  for (const Case c : {Case{"plane_strain", ConeFit::PlaneStrain, DpConeFit::PlaneStrain},
+                       Case{"compression", ConeFit::Compression, DpConeFit::Compression},
+                       Case{"extension", ConeFit::Extension, DpConeFit::Extension}}) {
+    const Scene s = parse_scene(rubber_block(std::string("shear_modulus = 0.22\nplasticity = { model = \"drucker_prager\", "
+                                                         "friction_angle = 30.0, cohesion = 0.01, cone = \"") +
+                                             c.name + "\" }"),
+                                "t.toml");
+    EXPECT_EQ(s.materials[0].plasticity.cone, c.cone) << c.name;
+    const PlasticityParams pp = plasticity_params_from_config(s.materials[0].plasticity);
+    EXPECT_EQ(pp.alpha_phi, dp_cone_alpha(Real(30.0), c.fit)) << c.name;
+    EXPECT_EQ(pp.k_c, dp_cone_k(Real(30.0), Real(0.01), c.fit)) << c.name;
   }
 }
 

@@ -41,11 +41,17 @@ enum class PlasticityModel : int { None = 0, VonMises = 1, DruckerPrager = 2 };
 //                 plane-strain runs (rubble's 2-D).
 //  Compression  — the cone through the compressive meridian of the
 //                 Mohr–Coulomb pyramid (triaxial/uniaxial compression is
-//                 exact); the usual 3-D choice.
-// Both cones share the Mohr–Coulomb apex, I1 = 3 c cot(phi), so
-// k_c/alpha_phi is the same for both fits and the two constants differ by the
-// same factor (1.3263 at phi = 19.8 deg).
-enum class DpConeFit : int { PlaneStrain = 0, Compression = 1 };
+//                 exact); the usual 3-D choice, the outer cone.
+//  Extension    — the cone through the tensile meridian of the pyramid
+//                 (triaxial extension: uniaxial tension and equal biaxial
+//                 compression are exact); the inner of the two 3-D vertex
+//                 cones (between its vertices it still pokes slightly out
+//                 of the pyramid).
+// All cones share the Mohr–Coulomb apex, I1 = 3 c cot(phi), so
+// k_c/alpha_phi is the same for every fit and two fits' constants differ by
+// the same factor (compression / plane strain 1.3263, extension / plane
+// strain 1.0572 at phi = 19.8 deg).
+enum class DpConeFit : int { PlaneStrain = 0, Compression = 1, Extension = 2 };
 
 struct PlasticityParams {  // plain data, copied to the GPU as it is
   PlasticityModel model = PlasticityModel::None;
@@ -76,6 +82,7 @@ struct PlasticReturn {
 // alpha_psi):
 //   PlaneStrain: tan(a)/sqrt(9 + 12 tan^2 a)            (Bui 2008)
 //   Compression: 2 sin(a)/(sqrt(3) (3 - sin a))
+//   Extension:   2 sin(a)/(sqrt(3) (3 + sin a))
 inline Real dp_cone_alpha(Real angle_deg, DpConeFit fit) {
   const Real a = angle_deg * Real(3.14159265358979323846) / Real(180);
   if (fit == DpConeFit::PlaneStrain) {
@@ -83,12 +90,14 @@ inline Real dp_cone_alpha(Real angle_deg, DpConeFit fit) {
     return t / std::sqrt(Real(9) + Real(12) * t * t);
   }
   const Real s = std::sin(a);
-  return Real(2) * s / (std::sqrt(Real(3)) * (Real(3) - s));
+  const Real meridian = fit == DpConeFit::Compression ? Real(3) - s : Real(3) + s;
+  return Real(2) * s / (std::sqrt(Real(3)) * meridian);
 }
 
 // Drucker–Prager cohesion term k_c:
 //   PlaneStrain: 3 c/sqrt(9 + 12 tan^2 phi)             (Bui 2008)
 //   Compression: 6 c cos(phi)/(sqrt(3) (3 - sin phi))
+//   Extension:   6 c cos(phi)/(sqrt(3) (3 + sin phi))
 inline Real dp_cone_k(Real phi_deg, Real cohesion, DpConeFit fit) {
   const Real a = phi_deg * Real(3.14159265358979323846) / Real(180);
   if (fit == DpConeFit::PlaneStrain) {
@@ -96,7 +105,8 @@ inline Real dp_cone_k(Real phi_deg, Real cohesion, DpConeFit fit) {
     return Real(3) * cohesion / std::sqrt(Real(9) + Real(12) * t * t);
   }
   const Real s = std::sin(a);
-  return Real(6) * cohesion * std::cos(a) / (std::sqrt(Real(3)) * (Real(3) - s));
+  const Real meridian = fit == DpConeFit::Compression ? Real(3) - s : Real(3) + s;
+  return Real(6) * cohesion * std::cos(a) / (std::sqrt(Real(3)) * meridian);
 }
 
 // Drucker–Prager constants from the friction angle phi [deg], the cohesion

@@ -142,7 +142,7 @@ struct PorosityConfig {
 // Plasticity of a solid (shear_modulus > 0): von Mises or Drucker-Prager
 // (Bui, Fukagawa, Sako & Ohno 2008); plasticity = { model = ..., ... }.
 enum class PlasticityType : int { None = 0, VonMises = 1, DruckerPrager = 2 };
-enum class ConeFit : int { PlaneStrain = 0, Compression = 1 };
+enum class ConeFit : int { PlaneStrain = 0, Compression = 1, Extension = 2 };
 struct PlasticityConfig {
   PlasticityType model = PlasticityType::None;
   double yield_stress = 0;     // [Pa] von Mises Y (> 0)
