@@ -116,7 +116,7 @@ std::vector<PlasticityParams> cohesive_models() {
 // I1 = 3 c cot phi): 1.32634, i.e. the compression cone is 32.6 % wider than
 // the plane-strain one (the plane-strain one 24.6 % narrower) — PHYSICS.md's
 // "~33 %" holds as the compression/plane-strain ratio.
-TEST(PlasticityConstants, Phi19_8BothFits) {
+TEST(PlasticityConstants, Phi19_8AllFits) {
   const double phi = 19.8 * kPi / 180, c = 1.0e4, s = std::sin(phi), co = std::cos(phi);
   const PlasticityParams ps = drucker_prager_params(19.8, c, 0, DpConeFit::PlaneStrain);
   const PlasticityParams cp = drucker_prager_params(19.8, c, 0, DpConeFit::Compression);
