@@ -52,15 +52,23 @@ PorosityParams porosity_params_from_config(const PorosityConfig& c) {
   return p;
 }
 
+// The scene's cone name as the physics' fit (a switch, so that a new fit
+// the scene offers without one here is a compiler warning).
+static DpConeFit dp_cone_fit(ConeFit cone) {
+  switch (cone) {
+    case ConeFit::Compression: return DpConeFit::Compression;
+    case ConeFit::Extension: return DpConeFit::Extension;
+    case ConeFit::PlaneStrain: break;
+  }
+  return DpConeFit::PlaneStrain;
+}
+
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   switch (c.model) {
     case PlasticityType::VonMises: return von_mises_params(Real(c.yield_stress));
-    case PlasticityType::DruckerPrager: {
-      const DpConeFit fit = c.cone == ConeFit::Compression ? DpConeFit::Compression
-                            : c.cone == ConeFit::Extension ? DpConeFit::Extension
-                                                           : DpConeFit::PlaneStrain;
-      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle), fit);
-    }
+    case PlasticityType::DruckerPrager:
+      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle),
+                                   dp_cone_fit(c.cone));
     case PlasticityType::None:
     default: return PlasticityParams{};
   }
