@@ -81,8 +81,6 @@
 
 #include <atomic>
 #include <thread>
-
-#include "../solver/src/cuda/cuda_stepper.hpp"  // cuda_backend_counts()
 #endif
 
 #include "../verification/common/record.hpp"
@@ -97,6 +95,7 @@
 #include "rubble/gravity/device_gravity.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/initial_conditions.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 
 #ifndef RUBBLE_COMMIT

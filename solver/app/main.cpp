@@ -33,6 +33,7 @@
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/initial_conditions.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 
 #ifndef RUBBLE_VERSION
@@ -258,11 +259,10 @@ int eos_command(const EosArgs& args) {
   const rubble::MaterialConfig m = rubble::load_material(args.material, args.sets);
   const rubble::EosParams eos = rubble::eos_params_from_material(m);
   const bool csv = args.format == "csv";
-  const char* names[] = {"ideal_gas", "murnaghan", "tillotson"};
   if (csv) {
     std::printf("rho,u,p,c_s,regime\n");
   } else {
-    std::printf("# %s: %s EOS, from %s\n# source: %s\n", m.name.c_str(), names[static_cast<int>(m.eos)],
+    std::printf("# %s: %s EOS, from %s\n# source: %s\n", m.name.c_str(), rubble::eos_kind_name(m.eos),
                 m.library_file.c_str(), m.source.c_str());
     if (m.units == "SI") std::printf("# units: rho [kg/m^3], u [J/kg], p [Pa], c_s [m/s]\n");
     else std::printf("# units: %s\n", m.units.c_str());

@@ -10,8 +10,8 @@
 #include <numbers>
 #include <string>
 
-#include "hydro_cpu.hpp"
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/neighbors/cell_list.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
 #include "rubble/physics/kernels.hpp"
@@ -184,7 +184,7 @@ static Real initial_viscosity_alpha(const MaterialParams& mp) {
 }
 
 template <int D>
-std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
+std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const Features& needs,
                                           ParticleStore<D>& ps) {
   check_resources<D>(scene, needs, hfact);  // before any particle is made
   const auto materials = material_params_from_scene(scene);
@@ -314,7 +314,7 @@ double estimated_particle_count(const Scene& scene) {
 }
 
 template <int D>
-std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, double hfact) {
+std::size_t bytes_per_particle(const Scene& scene, const Features& needs, double hfact) {
   ParticleStore<D> one;
   one.allocate(1, needs);
   std::size_t store = 0, snapshot = 0;
@@ -336,7 +336,7 @@ std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, doub
   const std::size_t lists = std::size_t(2 * 1.125 * neighbours) + 3 * sizeof(std::uint32_t);
   const std::size_t cells = sizeof(Vec<D>) + sizeof(Real) + sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
   // continuity density keeps its lists across evaluations: the positions
-  // at the search (HydroCpu::lists_still_hold); the search radius is in
+  // at the search (CpuBackend::search_still_holds); the search radius is in
   // `cells`; solids add 1/H and 1/rho^2 (SolidInverses) and the sums of
   // the first pass (GradientSums: L, the correction's M, the nearest r^2)
   const std::size_t kept = needs.continuity_density ? sizeof(Vec<D>) : 0;
@@ -384,7 +384,7 @@ std::string format_bytes(double bytes) {
 }
 
 template <int D>
-void check_resources(const Scene& scene, const FieldNeeds& needs, double hfact) {
+void check_resources(const Scene& scene, const Features& needs, double hfact) {
   const double n = estimated_particle_count<D>(scene);
   if (n > double(std::numeric_limits<std::int32_t>::max()))
     throw InputError(scene.file, "bodies",
@@ -444,42 +444,16 @@ Box<D> domain_from_scene(const Scene& scene) {
 #define RUBBLE_INSTANTIATE(D)                                                                      \
   template double lattice_cell_volume<D>(Lattice, double);                                         \
   template std::vector<Vec<D>> lattice_points<D>(BodyConfig);                                      \
-  template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const FieldNeeds&, ParticleStore<D>&); \
+  template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const Features&, ParticleStore<D>&); \
   template Box<D> domain_from_scene<D>(const Scene&);                                              \
   template double estimated_particle_count<D>(const Scene&);                                       \
-  template std::size_t bytes_per_particle<D>(const Scene&, const FieldNeeds&, double);              \
-  template void check_resources<D>(const Scene&, const FieldNeeds&, double);                        \
+  template std::size_t bytes_per_particle<D>(const Scene&, const Features&, double);              \
+  template void check_resources<D>(const Scene&, const Features&, double);                        \
   template void check_overlap<D>(const Scene&, const ParticleStore<D>&, const std::vector<std::int64_t>&, \
                                  const Box<D>&, double);
 RUBBLE_INSTANTIATE(1)
 RUBBLE_INSTANTIATE(2)
 RUBBLE_INSTANTIATE(3)
 #undef RUBBLE_INSTANTIATE
-
-FieldNeeds field_needs(const Scene& scene) {
-  const SimulationConfig& sim = scene.simulation;
-  FieldNeeds needs;
-  needs.summation_density = sim.density == DensityForm::Summation;
-  needs.continuity_density = sim.density == DensityForm::Continuity;
-  needs.gravity = scene.gravity.mode != GravityMode::Off;
-  for (const MaterialConfig& m : scene.materials) needs.solid = needs.solid || m.shear_modulus > 0;
-  for (const BodyConfig& b : scene.bodies) {
-    needs.boundary = needs.boundary || b.boundary != BoundaryKind::None;
-    needs.free_slip = needs.free_slip || b.sliding_wall();
-    needs.wall_friction = needs.wall_friction || b.wall_slip == WallSlip::Coulomb;
-  }
-  needs.xsph = sim.xsph > 0;
-  needs.kernel_correction = needs.solid && sim.kernel_correction;
-  for (const MaterialConfig& m : scene.materials) {
-    needs.porosity = needs.porosity || m.porosity.enabled;
-    needs.plasticity = needs.plasticity || m.plasticity.model != PlasticityType::None;
-    // every Drucker-Prager material stores eps_v: its tension-cracking
-    // opening persists (and so does dilatant flow, psi > 0)
-    needs.inelastic_volume = needs.inelastic_volume || m.plasticity.model == PlasticityType::DruckerPrager;
-    needs.damage = needs.damage || m.damage.enabled;
-    needs.viscosity_switch = needs.viscosity_switch || m.viscosity.switch_on;
-  }
-  return needs;
-}
 
 }  // namespace rubble

@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "hydro_cpu.hpp"
 #ifdef RUBBLE_HAVE_CUDA
 #include "cuda/cuda_stepper.hpp"
 #endif
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/cpu_stepper.hpp"
 #include "rubble/drivers/state_check.hpp"
 #include "rubble/gravity/device_gravity.hpp"
 #include "rubble/integrate/leapfrog.hpp"
@@ -279,85 +279,6 @@ void check_periodic_room(const Scene& scene, const Box<D>& domain, const Particl
   }
 }
 
-// The CPU backend behind the time loop's interface (the CUDA one is
-// solver/src/cuda/cuda_stepper.hpp): the particles live in `ps`.
-template <int D>
-class CpuStepper {
- public:
-  // `resumed`: the store holds a restart snapshot's state, rates included,
-  // in the order it was written: neither sorted nor evaluated again.
-  CpuStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed, bool keep_lists)
-      : ps_(ps), sys_(scene, ps, domain) {
-    sys_.keep_neighbour_lists(keep_lists);
-    staggered_ = scene.simulation.stress_update == StressUpdate::Staggered && sys_.solid();
-    for (int k = 0; k < D; ++k) g_[k] = Real(scene.simulation.gravity[k]);
-    if (resumed) return;
-    sys_.sort_particles();
-    sys_.evaluate();
-  }
-  void sort_particles() { sys_.sort_particles(); }
-  double dt_limit() { return double(sys_.dt_limit()); }
-  void leapfrog(double dt) { leapfrog_step<D>(sys_, ps_, Real(dt), staggered_); }
-  Rk2Result rk2(double dt, double tol, double dt_min) {
-    return rk2_adaptive_step<D>(sys_, ps_, Real(dt), Real(tol), Real(dt_min));
-  }
-  void damp(double f) {
-    const Real fr = Real(f);
-#pragma omp parallel for if (ps_.n > 4096)
-    for (std::size_t i = 0; i < ps_.n; ++i) ps_.v[i] *= fr;
-  }
-  // Index of the first particle with a non-finite state, or n.
-  std::size_t first_non_finite() {
-    const StoreView<D> s = ps_.view();
-    for (std::size_t i = 0; i < ps_.n; ++i)
-      if (!finite_particle<D>(s, i)) return i;
-    return ps_.n;
-  }
-  ConservedRecord conserved(double t, std::int64_t step, double dt) {
-    return measure_conserved<D>(ps_, t, step, dt, g_);
-  }
-  const ParticleStore<D>& host() { return ps_; }  // the state, on the host
-  // The state check's last good state: the snapshot fields as they were
-  // before the step, written to NAME.failed.h5 when the step fails. Those a
-  // step changes are copied before each step; the constant ones (mass,
-  // material, id, boundary flags, flaws) are taken from the store only when
-  // the state is asked for, since no step changes them and the particles are
-  // sorted only between steps (issue #14: 20 bytes per particle less held,
-  // and less copied every step).
-  void keep_good() {
-    good_.n = ps_.n;
-    for (const auto& f : field_table<D>())
-      if (f.snapshot && f.role != FieldRole::Constant)
-        std::visit([&](auto member) { good_.*member = ps_.*member; }, f.member);
-  }
-  const ParticleStore<D>& last_good() {
-    for (const auto& f : field_table<D>())
-      if (f.snapshot && f.role == FieldRole::Constant)
-        std::visit([&](auto member) { good_.*member = ps_.*member; }, f.member);
-    return good_;
-  }
-  // After the time loop: the last good state and the driver's neighbour
-  // data are no longer needed (run_loop, before it copies the final state).
-  void release_work_memory() {
-    good_ = ParticleStore<D>{};
-    sys_.release_work_memory();
-  }
-  std::size_t size() const { return ps_.n; }
-  std::int64_t bytes_downloaded() const { return 0; }  // the state never leaves the host
-  std::int64_t correction_fallbacks() const { return sys_.correction_fallbacks(); }
-  std::int64_t evaluations() const { return sys_.evaluations(); }
-  bool solid() const { return sys_.solid(); }
-  const RhsPhaseSeconds& rhs_phase_seconds() const { return sys_.phase_seconds(); }
-  std::int64_t neighbour_searches() const { return sys_.neighbor_rebuilds(); }
-  static constexpr const char* name = "cpu";
-
- private:
-  ParticleStore<D>& ps_;
-  ParticleStore<D> good_;  // keep_good()
-  HydroCpu<D> sys_;
-  Vec<D> g_ = Vec<D>::zero();  // simulation.gravity (its potential energy)
-  bool staggered_ = false;     // solids: simulation.stress_update = "staggered"
-};
 
 // "particle 17 of bodies[1] (id 417) at x = (0.1, 0.2)": a particle as the
 // user knows it, by body and original index, never by its sorted index.
@@ -648,12 +569,12 @@ template <int D>
 FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   const auto wall_start = std::chrono::steady_clock::now();
   const SimulationConfig& sim = scene.simulation;
-  const double hfact = sim.hfact > 0 ? sim.hfact : kernel_default_hfact(sim.kernel);
+  const double hfact = smoothing_factor(sim);
   if (!backend_built(opt.backend))
     throw RunError(std::string("backend '") + backend_name(opt.backend) +
                    "' is not in this build (configure with -DRUBBLE_CUDA=ON on a machine with nvcc)");
 
-  const FieldNeeds needs = field_needs(scene);
+  const Features needs = features_of_scene(scene);
   ParticleStore<D> ps;
   LoopStart start;
   std::vector<std::int64_t> body_first;
@@ -736,6 +657,8 @@ bool backend_built(Backend b) {
 
 #ifndef RUBBLE_HAVE_CUDA
 std::string gpu_description() { return "none (CPU-only build)"; }
+
+CudaBackendCounts cuda_backend_counts() { return {}; }
 
 DeviceGravityTiming cuda_barnes_hut_field(const Vec<3>*, const Real*, const Real*, std::size_t, const GravityConfig&,
                                           KernelType, Vec<3>*, Real*) {

@@ -25,6 +25,7 @@
 
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 
 namespace rubble {
@@ -373,7 +374,7 @@ class SceneReader {
   MaterialConfig read_material_table(const std::string& p, const toml::table& t, bool library);
   void read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c);
   void read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c);
-  void read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o);
+  void read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosOptionsConfig& o);
   void read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   void read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   void read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m);
@@ -619,8 +620,8 @@ void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, Ti
 
 // The add-on options: rho_limit, p_min, cs_min (each off unless given) and
 // the Tillotson cs_floor (on unless set to false).
-void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosType eos, EosOptionsConfig& o) {
-  if (eos == EosType::IdealGas && t.contains("rho_limit"))
+void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosOptionsConfig& o) {
+  if (eos == EosKind::IdealGas && t.contains("rho_limit"))
     fail(sub(p, "rho_limit"), "the ideal gas has no tension cut-off (it needs a reference density: murnaghan or tillotson)",
          t.get("rho_limit"));
   if (auto x = number(t, "rho_limit", p)) {
@@ -641,7 +642,7 @@ void SceneReader::read_eos_options(const toml::table& t, const std::string& p, E
     require(*x >= 0, t, "cs_min", p, *x, ">= 0 (0 = off)");
     o.cs_min = *x;
   }
-  if (t.contains("cs_floor") && eos != EosType::Tillotson)
+  if (t.contains("cs_floor") && eos != EosKind::Tillotson)
     fail(sub(p, "cs_floor"), "only the Tillotson EOS has a sound-speed floor (c^2 >= A/rho0); use cs_min for a minimum",
          t.get("cs_floor"));
   if (auto b = boolean(t, "cs_floor", p)) o.cs_floor = *b;
@@ -654,17 +655,17 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   // The EOS decides which further keys belong here.
   const auto eos = string(t, "eos", p);
   if (!eos) fail(sub(p, "eos"), "missing required key (the equation of state; one of: ideal_gas, murnaghan, tillotson)");
-  m.eos = choice(t, "eos", p, EosType::IdealGas,
-                 {{"ideal_gas", EosType::IdealGas}, {"murnaghan", EosType::Murnaghan}, {"tillotson", EosType::Tillotson}});
+  m.eos = choice(t, "eos", p, EosKind::IdealGas,
+                 {{"ideal_gas", EosKind::IdealGas}, {"murnaghan", EosKind::Murnaghan}, {"tillotson", EosKind::Tillotson}});
   // (rho_limit is known to every EOS so that the ideal gas can say why it
   // has no tension cut-off)
   std::vector<std::string> known = {"eos",    "viscosity",     "conductivity",     "rho_limit",
                                     "p_min",  "cs_min",        "cs_floor",         "shear_modulus",
                                     "artificial_stress",             "stress_diffusion",
                                     "porosity", "plasticity", "damage"};
-  if (m.eos == EosType::IdealGas) known.push_back("gamma");
-  if (m.eos == EosType::Murnaghan) known.push_back("murnaghan");
-  if (m.eos == EosType::Tillotson) known.push_back("tillotson");
+  if (m.eos == EosKind::IdealGas) known.push_back("gamma");
+  if (m.eos == EosKind::Murnaghan) known.push_back("murnaghan");
+  if (m.eos == EosKind::Tillotson) known.push_back("tillotson");
   if (library) known.insert(known.end(), {"source", "units", "description"});
   check_keys(t, p, known);
 
@@ -680,12 +681,12 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
   }
 
   switch (m.eos) {
-    case EosType::IdealGas:
+    case EosKind::IdealGas:
       m.gamma = required_number(t, "gamma", p, "the ideal_gas EOS needs gamma, the adiabatic index, > 1");
       require(m.gamma > 1, t, "gamma", p, m.gamma, "> 1");
       break;
-    case EosType::Murnaghan: read_murnaghan(t, p, m.murnaghan); break;
-    case EosType::Tillotson: read_tillotson(t, p, m.tillotson); break;
+    case EosKind::Murnaghan: read_murnaghan(t, p, m.murnaghan); break;
+    case EosKind::Tillotson: read_tillotson(t, p, m.tillotson); break;
   }
   read_eos_options(t, p, m.eos, m.eos_options);
 
@@ -792,12 +793,12 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
   const auto model = string(q, "model", qp);
   if (!model) fail(sub(qp, "model"), "missing required key (the porosity model; \"p_alpha\")");
   choice(q, "model", qp, 0, {{"p_alpha", 0}});
-  c.crush_curve = choice(q, "crush_curve", qp, CrushCurveType::Quadratic,
-                         {{"quadratic", CrushCurveType::Quadratic}, {"steep", CrushCurveType::Steep}});
+  c.crush_curve = choice(q, "crush_curve", qp, CrushCurve::Quadratic,
+                         {{"quadratic", CrushCurve::Quadratic}, {"steep", CrushCurve::Steep}});
   std::vector<std::string> known = {"model", "crush_curve", "alpha0", "p_e", "p_s", "c_e", "c_s0"};
-  if (c.crush_curve == CrushCurveType::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
+  if (c.crush_curve == CrushCurve::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
   check_keys(q, qp, known);
-  if (m.eos == EosType::IdealGas)
+  if (m.eos == EosKind::IdealGas)
     fail(qp, "a porous material needs a Murnaghan or Tillotson matrix; an ideal gas has no solid matrix to compact",
          q.get("model"));
   c.enabled = true;
@@ -817,7 +818,7 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
     require(c.c_e > 0 && c.c_e < c.c_s0, q, "c_e", qp, c.c_e,
             "> 0 and < c_s0 = " + fmt(c.c_s0) + " (porous material is elastically softer than its matrix)");
   }
-  if (c.crush_curve == CrushCurveType::Steep) {
+  if (c.crush_curve == CrushCurve::Steep) {
     c.p_t = required_number(q, "p_t", qp, "the steep curve's transition pressure [Pa]");
     require(c.p_t > c.p_e && c.p_t < c.p_s, q, "p_t", qp, c.p_t, "between p_e and p_s");
     c.alpha_t = required_number(q, "alpha_t", qp, "the steep curve's distention at p_t");
@@ -837,9 +838,9 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
   PlasticityConfig& c = m.plasticity;
   const auto model = string(q, "model", qp);
   if (!model) fail(sub(qp, "model"), "missing required key (\"von_mises\" or \"drucker_prager\")");
-  c.model = choice(q, "model", qp, PlasticityType::None,
-                   {{"von_mises", PlasticityType::VonMises}, {"drucker_prager", PlasticityType::DruckerPrager}});
-  if (c.model == PlasticityType::VonMises) {
+  c.model = choice(q, "model", qp, PlasticityModel::None,
+                   {{"von_mises", PlasticityModel::VonMises}, {"drucker_prager", PlasticityModel::DruckerPrager}});
+  if (c.model == PlasticityModel::VonMises) {
     check_keys(q, qp, {"model", "yield_stress"});
     c.yield_stress = required_number(q, "yield_stress", qp, "the von Mises yield stress Y [Pa]");
     require(c.yield_stress > 0, q, "yield_stress", qp, c.yield_stress, "> 0");
@@ -857,10 +858,10 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
               "in [0, friction_angle = " + fmt(c.friction_angle) + "] degrees (psi > phi is unphysical)");
       c.dilatancy_angle = *x;
     }
-    c.cone = choice(q, "cone", qp, ConeFit::PlaneStrain,
-                    {{"plane_strain", ConeFit::PlaneStrain},
-                     {"compression", ConeFit::Compression},
-                     {"extension", ConeFit::Extension}});
+    c.cone = choice(q, "cone", qp, DpConeFit::PlaneStrain,
+                    {{"plane_strain", DpConeFit::PlaneStrain},
+                     {"compression", DpConeFit::Compression},
+                     {"extension", DpConeFit::Extension}});
   }
   if (!(m.shear_modulus > 0))
     fail(qp, "plasticity acts on solids only; give the material a shear_modulus > 0 (a fluid has no deviatoric stress)");
@@ -980,7 +981,7 @@ void SceneReader::check_pressure_reachable(const std::string& p, const toml::tab
   const double a0 = m.porosity.enabled ? m.porosity.alpha0 : 1.0;
   if (eos_internal_energy_from_pressure(e, Real(a0 * rho), Real(a0 * pressure)) >= 0) return;
   const std::string key = sub(p, "pressure");
-  if (m.eos == EosType::Murnaghan) {
+  if (m.eos == EosKind::Murnaghan) {
     const MurnaghanConfig& c = m.murnaghan;
     const double base = 1 + c.n * pressure / c.K0;
     fail(key,
@@ -1308,7 +1309,7 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
   }
   b.material = *material;
   b.material_id = static_cast<int>(it - names.begin());
-  if (mats[b.material_id].eos != EosType::IdealGas)
+  if (mats[b.material_id].eos != EosKind::IdealGas)
     fail(p + ".material", "a polytrope needs an ideal_gas material (material '" + *material + "' is not)",
          t.get("material"));
 

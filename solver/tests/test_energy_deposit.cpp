@@ -26,7 +26,7 @@ std::string blast_scene(const std::string& deposit) {
 
 ParticleStore<3> generate(const Scene& s) {
   ParticleStore<3> ps;
-  generate_bodies<3>(s, 1.2, FieldNeeds{}, ps);
+  generate_bodies<3>(s, 1.2, Features{}, ps);
   return ps;
 }
 

@@ -23,6 +23,7 @@
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/reference/eos_finite_difference.hpp"
 #include "rubble/run.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 
 using namespace rubble;
@@ -685,7 +686,7 @@ TEST_F(eos_library, EveryLibraryFileLoadsAndValidates) {
 TEST_F(eos_library, TillotsonFilesMatchThePhysicsTable) {
   for (const auto& [name, t] : kTable) {
     const MaterialConfig m = load_material(name);
-    ASSERT_EQ(m.eos, EosType::Tillotson) << name;
+    ASSERT_EQ(m.eos, EosKind::Tillotson) << name;
     const TillotsonConfig& c = m.tillotson;
     const double got[10] = {c.rho0, c.A, c.B, c.E0, c.E_iv, c.E_cv, c.a, c.b, c.alpha, c.beta};
     const double want[10] = {t.rho0, t.A, t.B, t.E0, t.E_iv, t.E_cv, t.a, t.b, t.alpha, t.beta};
@@ -699,7 +700,7 @@ TEST_F(eos_library, TillotsonFilesMatchThePhysicsTable) {
 
 TEST_F(eos_library, RubberIsTheLinearMurnaghanOfTheRings) {
   const MaterialConfig m = load_material("rubber");
-  ASSERT_EQ(m.eos, EosType::Murnaghan);
+  ASSERT_EQ(m.eos, EosKind::Murnaghan);
   EXPECT_EQ(m.murnaghan.rho0, 1.0);
   EXPECT_EQ(m.murnaghan.K0, 1.0);
   EXPECT_EQ(m.murnaghan.n, 1.0);
@@ -713,7 +714,7 @@ TEST_F(eos_library, NylonIsSpheralsTillotsonEntryInSI) {
   // 1 erg/g = 1e-4 J/kg, 1 g/cm^3 = 1000 kg/m^3
   // (reference_data/materials/nylon.toml gives the provenance)
   const MaterialConfig m = load_material("nylon");
-  ASSERT_EQ(m.eos, EosType::Tillotson);
+  ASSERT_EQ(m.eos, EosKind::Tillotson);
   const TillotsonConfig& c = m.tillotson;
   EXPECT_DOUBLE_EQ(c.rho0, 1.185 * 1000);
   EXPECT_DOUBLE_EQ(c.A, 1.01e11 * 0.1);
@@ -854,7 +855,7 @@ TEST_F(eos_scene, LibraryMaterialWithSingleParameterOverrides) {
   const MaterialConfig& m = s.materials[0];
   EXPECT_EQ(m.name, "rock");
   EXPECT_EQ(m.library, "basalt");
-  EXPECT_EQ(m.eos, EosType::Tillotson);
+  EXPECT_EQ(m.eos, EosKind::Tillotson);
   EXPECT_EQ(m.tillotson.A, 3.0e10);   // overridden
   EXPECT_EQ(m.tillotson.B, 2.67e10);  // from the library
   EXPECT_EQ(m.tillotson.E_cv, 1.82e7);
@@ -877,7 +878,7 @@ TEST_F(eos_scene, InlineMaterialsNeedEveryParameter) {
   const Scene r = parse_scene(
       scene_with("eos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = 1.0, n = 1.0 }", "density = 1.0\ninternal_energy = 0.0"),
       "test.toml");
-  EXPECT_EQ(r.materials[0].eos, EosType::Murnaghan);
+  EXPECT_EQ(r.materials[0].eos, EosKind::Murnaghan);
   expect_scene_error(scene_with("eos = \"tillotson\"\ntillotson = { rho0 = 2700.0 }"), "materials.rock.tillotson.A",
                      {"missing required key"});
   expect_scene_error(scene_with("eos = \"murnaghan\"\nmurnaghan = { rho0 = 1.0, K0 = -1.0, n = 1.0 }"),
@@ -973,7 +974,7 @@ TEST_F(eos_scene, ExistingIdealGasScenesStayValid) {
     for (const auto& entry : fs::directory_iterator(fs::path(RUBBLE_SOURCE_DIR) / dir))
       if (entry.path().extension() == ".toml") {
         const Scene s = load_scene_file(entry.path().string());
-        for (const auto& m : s.materials) EXPECT_EQ(m.eos, EosType::IdealGas) << entry.path();
+        for (const auto& m : s.materials) EXPECT_EQ(m.eos, EosKind::IdealGas) << entry.path();
       }
 }
 

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "rubble/physics/eos/eos.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 
 namespace fs = std::filesystem;

@@ -248,7 +248,7 @@ TEST(HydroPair, PressurePushesApart) {
 // Fields a hydro-only scene does not need are never allocated.
 TEST(ParticleStore, AllocatesOnlyWhatTheSceneNeeds) {
   ParticleStore<2> ps;
-  FieldNeeds needs;
+  Features needs;
   needs.summation_density = true;
   ps.allocate(10, needs);
   const auto f = ps.allocated_fields();
@@ -256,7 +256,7 @@ TEST(ParticleStore, AllocatesOnlyWhatTheSceneNeeds) {
   EXPECT_EQ(std::find(f.begin(), f.end(), "drhodt"), f.end());
 
   ParticleStore<2> pc;
-  FieldNeeds cont;
+  Features cont;
   cont.continuity_density = true;
   pc.allocate(10, cont);
   const auto g = pc.allocated_fields();
@@ -266,7 +266,7 @@ TEST(ParticleStore, AllocatesOnlyWhatTheSceneNeeds) {
 
 TEST(ParticleStore, PermuteMovesEveryField) {
   ParticleStore<1> ps;
-  ps.allocate(3, FieldNeeds{});
+  ps.allocate(3, Features{});
   for (int i = 0; i < 3; ++i) {
     ps.x[i][0] = i;
     ps.m[i] = 10 + i;

@@ -1,12 +1,14 @@
 // Time integrators on a problem with a known answer: independent unit
 // harmonic oscillators, dv/dt = -x (x = A cos t), with du/dt = -x v so that
 // u exercises the energy channel, driven through the same System interface
-// (evaluate(), domain()) as the SPH driver.
+// as the SPH step sequence (evaluate(), end_step(), domain(), and the host
+// loops of HostLoops).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "rubble/core/box.hpp"
+#include "rubble/drivers/host_loops.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/particles/particle_store.hpp"
@@ -15,8 +17,9 @@ using namespace rubble;
 
 namespace {
 
-// A mock of HydroCpu: rates of uncoupled unit-frequency oscillators.
-struct Oscillators {
+// A stand-in for the SPH step sequence: rates of uncoupled unit-frequency oscillators.
+struct Oscillators : HostLoops<1> {
+  explicit Oscillators(ParticleStore<1>& p) : HostLoops<1>(p), ps(p) {}
   ParticleStore<1>& ps;
   Box<1> box;
   int evaluations = 0;
@@ -33,7 +36,7 @@ struct Oscillators {
 
 ParticleStore<1> make_store() {
   ParticleStore<1> ps;
-  ps.allocate(3, FieldNeeds{});
+  ps.allocate(3, Features{});
   for (int i = 0; i < 3; ++i) {
     ps.x[i][0] = 1.0 + i;  // amplitude 1, 2, 3
     ps.v[i][0] = 0;
@@ -47,10 +50,10 @@ ParticleStore<1> make_store() {
 
 double leapfrog_error(double dt, double t_end) {
   ParticleStore<1> ps = make_store();
-  Oscillators sys{ps, {}};
+  Oscillators sys(ps);
   sys.evaluate();
   const int steps = static_cast<int>(std::lround(t_end / dt));
-  for (int s = 0; s < steps; ++s) leapfrog_step<1>(sys, ps, dt);
+  for (int s = 0; s < steps; ++s) leapfrog_step<1>(sys, dt);
   double err = 0;
   for (int i = 0; i < 3; ++i) err = std::max(err, std::fabs(ps.x[i][0] - (1.0 + i) * std::cos(t_end)));
   return err;
@@ -68,12 +71,12 @@ TEST(Leapfrog, SecondOrderConvergence) {
 // Symplectic: the energy error stays bounded (no drift) over 100 periods.
 TEST(Leapfrog, NoEnergyDriftOverManyPeriods) {
   ParticleStore<1> ps = make_store();
-  Oscillators sys{ps, {}};
+  Oscillators sys(ps);
   sys.evaluate();
   const double dt = 0.05;
   double max_err = 0;
   for (int s = 0; s < static_cast<int>(100 * 2 * M_PI / dt); ++s) {
-    leapfrog_step<1>(sys, ps, dt);
+    leapfrog_step<1>(sys, dt);
     const double e = 0.5 * (ps.v[2][0] * ps.v[2][0] + ps.x[2][0] * ps.x[2][0]);
     max_err = std::max(max_err, std::fabs(e - 4.5) / 4.5);
   }
@@ -88,7 +91,8 @@ TEST(Leapfrog, NoEnergyDriftOverManyPeriods) {
 // update's evaluation; evaluate_staggered(dt) that of the staggered stress
 // update (leapfrog.hpp): rho advances a whole step with the rate of the
 // velocity it is given (v_{1/2}) before the force is taken.
-struct WaveMode {
+struct WaveMode : HostLoops<1> {
+  WaveMode(ParticleStore<1>& p, double w_) : HostLoops<1>(p), ps(p), w(w_) {}
   ParticleStore<1>& ps;
   double w;
   Box<1> box;
@@ -111,7 +115,7 @@ struct WaveMode {
 // `steps` leapfrog steps of w dt = z.
 double wave_mode_energy_change(bool staggered, double z, int steps) {
   ParticleStore<1> ps;
-  FieldNeeds needs;
+  Features needs;
   needs.continuity_density = true;
   ps.allocate(1, needs);
   ps.x[0][0] = 0;
@@ -119,11 +123,11 @@ double wave_mode_energy_change(bool staggered, double z, int steps) {
   ps.rho[0] = 1;
   ps.u[0] = 0;
   ps.h[0] = ps.cs[0] = 1;
-  WaveMode sys{ps, 1.0, {}};
+  WaveMode sys(ps, 1.0);
   sys.evaluate();
   double worst = 0;
   for (int k = 0; k < steps; ++k) {
-    leapfrog_step<1>(sys, ps, Real(z), staggered);
+    leapfrog_step<1>(sys, Real(z), staggered);
     const double e = ps.v[0][0] * ps.v[0][0] + (ps.rho[0] - 1) * (ps.rho[0] - 1);
     worst = std::max(worst, std::fabs(e - 1));
   }
@@ -155,13 +159,13 @@ TEST(Rk2Adaptive, ErrorFollowsTolerance) {
   const double tols[2] = {1e-4, 1e-6};
   for (int k = 0; k < 2; ++k) {
     ParticleStore<1> ps = make_store();
-    Oscillators sys{ps, {}};
+    Oscillators sys(ps);
     sys.evaluate();
     double t = 0, dt = 0.1;
     const double t_end = 2 * M_PI;
     while (t < t_end - 1e-14) {
       dt = std::min(dt, t_end - t);
-      const Rk2Result r = rk2_adaptive_step<1>(sys, ps, dt, tols[k], 1e-12);
+      const Rk2Result r = rk2_adaptive_step<1>(sys, dt, tols[k], 1e-12);
       t += r.dt_taken;
       dt = r.dt_next;
       ++steps_for[k];
@@ -181,9 +185,9 @@ TEST(Rk2Adaptive, ErrorFollowsTolerance) {
 // restored before retrying with a smaller step.
 TEST(Rk2Adaptive, RejectsTooLargeStep) {
   ParticleStore<1> ps = make_store();
-  Oscillators sys{ps, {}};
+  Oscillators sys(ps);
   sys.evaluate();
-  const Rk2Result r = rk2_adaptive_step<1>(sys, ps, 1.0, 1e-8, 1e-12);
+  const Rk2Result r = rk2_adaptive_step<1>(sys, 1.0, 1e-8, 1e-12);
   EXPECT_GT(r.rejections, 0);
   EXPECT_LT(r.dt_taken, 1.0);
   EXPECT_NEAR(ps.x[0][0], std::cos(r.dt_taken), 1e-6);

@@ -70,7 +70,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 template <int D>
 ParticleStore<D> make_store(std::size_t n) {
   ParticleStore<D> ps;
-  FieldNeeds needs;
+  Features needs;
   needs.summation_density = true;
   needs.gravity = true;  // a_grav (a snapshot field) and phi
   needs.solid = true;     // S (a snapshot field) and dSdt
@@ -173,7 +173,7 @@ TYPED_TEST(SnapshotTest, RoundTripIsExact) {
   EXPECT_FALSE(fs::exists(path + ".tmp"));
 
   ParticleStore<D> back;
-  back.allocate(3, FieldNeeds{});  // stale content must be replaced
+  back.allocate(3, Features{});  // stale content must be replaced
   SnapshotMeta meta_back;
   read_snapshot(path, back, meta_back);
 
@@ -349,7 +349,7 @@ TEST(Snapshot, PythonH5pyReadsIt) {
   TempDir dir;
   const std::string path = dir.file("py.0000.h5");
   ParticleStore<3> ps;
-  ps.allocate(4, FieldNeeds{});
+  ps.allocate(4, Features{});
   for (std::size_t i = 0; i < 4; ++i) {
     for (int k = 0; k < 3; ++k) ps.x[i][k] = Real(0.5) * Real(i) + Real(k);
     ps.m[i] = Real(2);
@@ -642,7 +642,7 @@ TEST(ConservedLog, FullDiskGivesTheReason) {
 
 TEST(MeasureConserved, ThreeParticles3D) {
   ParticleStore<3> ps;
-  ps.allocate(3, FieldNeeds{});
+  ps.allocate(3, Features{});
   // m    x          v          u
   // 1  (1,0,0)   (0,1,0)    10
   // 2  (0,1,0)   (0,0,3)    20
@@ -680,7 +680,7 @@ TEST(MeasureConserved, ThreeParticles3D) {
 
 TEST(MeasureConserved, ThreeParticles2D) {
   ParticleStore<2> ps;
-  ps.allocate(3, FieldNeeds{});
+  ps.allocate(3, Features{});
   // m    x       v        u
   // 1  (1,0)   (0,2)     1
   // 2  (0,3)   (1,0)     1
@@ -725,7 +725,7 @@ TEST(MeasureConserved, ThreeParticles2D) {
 
 TEST(MeasureConserved, ThreeParticles1D) {
   ParticleStore<1> ps;
-  ps.allocate(3, FieldNeeds{});
+  ps.allocate(3, Features{});
   const double m[3] = {1, 2, 3}, x[3] = {0, 1, 2}, v[3] = {1, -1, 2};
   for (int i = 0; i < 3; ++i) {
     ps.m[i] = Real(m[i]);

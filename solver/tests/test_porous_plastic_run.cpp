@@ -128,7 +128,7 @@ TEST(PorosityScene, KeysAreReadWithDefaults) {
   const Scene s = parse_scene(porous_rod(), "t.toml");
   const PorosityConfig& p = s.materials[0].porosity;
   EXPECT_TRUE(p.enabled);
-  EXPECT_EQ(p.crush_curve, CrushCurveType::Quadratic);  // the default
+  EXPECT_EQ(p.crush_curve, CrushCurve::Quadratic);  // the default
   EXPECT_EQ(p.alpha0, 1.275);
   EXPECT_EQ(p.p_e, 8e7);
   EXPECT_EQ(p.p_s, 7e8);
@@ -137,7 +137,7 @@ TEST(PorosityScene, KeysAreReadWithDefaults) {
                                          "alpha_t = 1.9, p_e = 1e6, p_t = 6.8e7, p_s = 2.13e8, n1 = 12.0, n2 = 3.0, "
                                          "c_e = 1500.0, c_s0 = 3000.0 }"),
                               "t.toml");
-  EXPECT_EQ(t.materials[0].porosity.crush_curve, CrushCurveType::Steep);
+  EXPECT_EQ(t.materials[0].porosity.crush_curve, CrushCurve::Steep);
   EXPECT_EQ(t.materials[0].porosity.n1, 12.0);
   // the library's porous materials load and validate
   for (const char* name : {"porous_aluminium", "porous_basalt", "pumice"}) {
@@ -161,7 +161,7 @@ TEST(PorosityScene, ElasticBranchIsOptionalAsAPair) {
   EXPECT_EQ(pumice.porosity.c_e, 0.0);
   EXPECT_EQ(pumice.porosity.c_s0, 0.0);
   // J09's pumice curve as PHYSICS.md section 4 prints it; the matrix is Spheral's 'pumice' in SI
-  EXPECT_EQ(pumice.porosity.crush_curve, CrushCurveType::Steep);
+  EXPECT_EQ(pumice.porosity.crush_curve, CrushCurve::Steep);
   EXPECT_EQ(pumice.porosity.alpha0, 4.64);
   EXPECT_EQ(pumice.porosity.alpha_t, 1.90);
   EXPECT_EQ(pumice.porosity.p_e, 1e6);
@@ -216,25 +216,25 @@ TEST(PlasticityScene, KeysAreReadWithDefaults) {
                                            "friction_angle = 30.0, cohesion = 0.01 }"),
                               "t.toml");
   const PlasticityConfig& p = s.materials[0].plasticity;
-  EXPECT_EQ(p.model, PlasticityType::DruckerPrager);
+  EXPECT_EQ(p.model, PlasticityModel::DruckerPrager);
   EXPECT_EQ(p.dilatancy_angle, 0.0);       // default psi = 0
-  EXPECT_EQ(p.cone, ConeFit::PlaneStrain);  // default fit
+  EXPECT_EQ(p.cone, DpConeFit::PlaneStrain);  // default fit
   const Scene v = parse_scene(rubber_block("shear_modulus = 0.22\nplasticity = { model = \"von_mises\", yield_stress = 0.01 }"),
                               "t.toml");
-  EXPECT_EQ(v.materials[0].plasticity.model, PlasticityType::VonMises);
+  EXPECT_EQ(v.materials[0].plasticity.model, PlasticityModel::VonMises);
   EXPECT_EQ(v.materials[0].plasticity.yield_stress, 0.01);
   for (const char* name : {"aluminium_bars", "phobos_regolith"}) {
     const MaterialConfig m = load_material(name);
-    EXPECT_EQ(m.plasticity.model, PlasticityType::DruckerPrager) << name;
+    EXPECT_EQ(m.plasticity.model, PlasticityModel::DruckerPrager) << name;
   }
 }
 
 // Each cone name reaches the run as its fit's constants (plasticity.hpp).
 TEST(PlasticityScene, ConeNamesSelectTheirFit) {
-  struct Case { const char* name; ConeFit cone; DpConeFit fit; };
-  for (const Case c : {Case{"plane_strain", ConeFit::PlaneStrain, DpConeFit::PlaneStrain},
-                       Case{"compression", ConeFit::Compression, DpConeFit::Compression},
-                       Case{"extension", ConeFit::Extension, DpConeFit::Extension}}) {
+  struct Case { const char* name; DpConeFit cone; DpConeFit fit; };
+  for (const Case c : {Case{"plane_strain", DpConeFit::PlaneStrain, DpConeFit::PlaneStrain},
+                       Case{"compression", DpConeFit::Compression, DpConeFit::Compression},
+                       Case{"extension", DpConeFit::Extension, DpConeFit::Extension}}) {
     const Scene s = parse_scene(rubber_block(std::string("shear_modulus = 0.22\nplasticity = { model = \"drucker_prager\", "
                                                          "friction_angle = 30.0, cohesion = 0.01, cone = \"") +
                                              c.name + "\" }"),

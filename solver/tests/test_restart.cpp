@@ -332,7 +332,7 @@ TEST(Restart, RefusesASnapshotWithoutRestartData) {
   const fs::path dir = temp_dir("bare");
   fs::create_directories(dir);
   ParticleStore<1> ps;
-  FieldNeeds needs;
+  Features needs;
   ps.allocate(3, needs);
   const std::string path = (dir / "bare.h5").string();
   write_snapshot<1>(path, ps, SnapshotMeta{});

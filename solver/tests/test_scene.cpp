@@ -77,7 +77,7 @@ TEST(Scene, MinimalSceneGetsDefaults) {
 
   ASSERT_EQ(s.materials.size(), 1u);
   EXPECT_EQ(s.materials[0].name, "gas");
-  EXPECT_EQ(s.materials[0].eos, rubble::EosType::IdealGas);
+  EXPECT_EQ(s.materials[0].eos, rubble::EosKind::IdealGas);
   EXPECT_DOUBLE_EQ(s.materials[0].gamma, 1.4);
   EXPECT_DOUBLE_EQ(s.materials[0].viscosity.alpha, 1.0);
   EXPECT_DOUBLE_EQ(s.materials[0].viscosity.beta, 2.0);

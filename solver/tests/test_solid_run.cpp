@@ -17,6 +17,7 @@
 #include "rubble/io/snapshot.hpp"
 #include "rubble/reference/elastic_energy.hpp"
 #include "rubble/scene/initial_conditions.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/materials.hpp"
 #include "rubble/run.hpp"
 
@@ -510,7 +511,7 @@ TEST(SolidRun, KernelCorrectionConservesAngularMomentum) {
 TEST(SolidRun, CorrectionFieldOnlyWithKernelCorrection) {
   auto fields = [](const std::string& sc) {
     ParticleStore<2> one;
-    one.allocate(1, field_needs(parse_scene(sc, "t.toml")));
+    one.allocate(1, features_of_scene(parse_scene(sc, "t.toml")));
     return one.allocated_fields();
   };
   std::string corrected = block_scene("shear_modulus = 0.22");

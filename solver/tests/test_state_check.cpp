@@ -19,7 +19,7 @@ constexpr Real kInf = std::numeric_limits<Real>::infinity();
 
 // One particle with every field allocated and a valid state.
 ParticleStore<2> one_particle() {
-  FieldNeeds all;
+  Features all;
   all.continuity_density = all.summation_density = all.gravity = all.solid = all.boundary = all.xsph = true;
   all.porosity = all.plasticity = all.free_slip = all.wall_friction = all.inelastic_volume = true;
   ParticleStore<2> ps;
@@ -94,7 +94,7 @@ TEST(StateCheck, TheCauseIsReportedBeforeItsConsequences) {
 // Fields a run does not allocate are not checked (and not touched).
 TEST(StateCheck, UnallocatedFieldsAreSkipped) {
   ParticleStore<2> ps;
-  ps.allocate(1, FieldNeeds{});
+  ps.allocate(1, Features{});
   ps.rho[0] = 1;
   ps.h[0] = 0.1;
   EXPECT_EQ(fault_of(ps), kStateOk);

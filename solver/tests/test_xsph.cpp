@@ -11,6 +11,7 @@
 
 #include "rubble/core/box.hpp"
 #include "rubble/core/error.hpp"
+#include "rubble/drivers/host_loops.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/particles/particle_store.hpp"
@@ -33,7 +34,8 @@ std::string block_scene(const std::string& sim_extra, const std::string& body_ex
 
 // A system with no forces whose XSPH correction is a fixed field, to check
 // that both integrators drift with v + xsph_v.
-struct ForceFree {
+struct ForceFree : HostLoops<1> {
+  explicit ForceFree(ParticleStore<1>& p) : HostLoops<1>(p), ps(p) {}
   ParticleStore<1>& ps;
   Box<1> box;
   const Box<1>& domain() const { return box; }
@@ -48,7 +50,7 @@ struct ForceFree {
 TEST(Xsph, IntegratorsDriftWithTheCorrection) {
   for (int which = 0; which < 2; ++which) {
     ParticleStore<1> ps;
-    FieldNeeds needs;
+    Features needs;
     needs.xsph = true;
     ps.allocate(3, needs);
     for (int i = 0; i < 3; ++i) {
@@ -58,11 +60,11 @@ TEST(Xsph, IntegratorsDriftWithTheCorrection) {
       ps.cs[i] = 1;
       ps.rho[i] = 1;
     }
-    ForceFree sys{ps, Box<1>{}};
+    ForceFree sys(ps);
     sys.evaluate();
     const double dt = 0.1;
-    if (which == 0) leapfrog_step<1>(sys, ps, dt);
-    else rk2_adaptive_step<1>(sys, ps, dt, 1e-5, 1e-9);
+    if (which == 0) leapfrog_step<1>(sys, dt);
+    else rk2_adaptive_step<1>(sys, dt, 1e-5, 1e-9);
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(ps.x[i][0], i + dt * (1.0 + 0.25 * (1.0 + i)), 1e-14) << which;
   }
 }
@@ -116,7 +118,7 @@ TEST(Xsph, SceneKeyIsValidated) {
 
 TEST(Xsph, FieldAllocatedOnlyWhenOn) {
   ParticleStore<2> off, on;
-  FieldNeeds needs;
+  Features needs;
   off.allocate(10, needs);
   EXPECT_TRUE(off.xsph_v.empty());
   EXPECT_EQ(position_rate(off, 3)[0], off.v[3][0]);

@@ -50,7 +50,7 @@ inline Plate plate_of(const rubble::Scene& scene) {
   if (!(p.xc >= b.min[0] && p.xc < b.max[0]))
     throw std::runtime_error("the clamp mouth (largest x of the clamp) must lie within the plate's x range");
   const rubble::MaterialConfig& m = scene.materials[0];
-  if (m.eos != rubble::EosType::Murnaghan || m.murnaghan.n != 1.0 || m.shear_modulus <= 0)
+  if (m.eos != rubble::EosKind::Murnaghan || m.murnaghan.n != 1.0 || m.shear_modulus <= 0)
     throw std::runtime_error("the plate material is a linear (Murnaghan n = 1) elastic solid");
   p.L = b.max[0] - p.xc;
   p.H = b.max[1] - b.min[1];

@@ -9,7 +9,7 @@
 // For every resolution n (particles through the thickness H, dx = H/n),
 // support radius hfact (H_kernel/dx) and artificial-stress epsilon, the
 // plate scene is built at rest (positions fixed for good) and the real
-// evaluation (HydroCpu::evaluate: continuity density, EOS, kernel-gradient
+// evaluation (the step sequence's evaluate: continuity density, EOS, kernel-gradient
 // correction, Hooke's law, artificial stress, clamp) is probed:
 //   1. a small velocity on one degree of freedom j of one free particle,
 //      everything else at rest (groups of dofs far enough apart not to
@@ -53,10 +53,11 @@
 #include <string>
 #include <vector>
 
-#include "../../solver/src/hydro_cpu.hpp"  // the CPU right-hand side itself (not part of the public API)
 #include "../../verification/common/args.hpp"
 #include "../../verification/common/record.hpp"
 #include "plate.hpp"
+#include "rubble/drivers/cpu_stepper.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/scene/scene.hpp"
@@ -165,11 +166,12 @@ ModeResult bending_mode(const Args& args, double n, double hfact, double eps, bo
   rubble::Scene scene = rubble::load_scene_file(args.scene, sets);
   for (rubble::BodyConfig& b : scene.bodies) b.velocity = {0.0, 0.0, 0.0};
 
-  const rubble::FieldNeeds needs = rubble::field_needs(scene);
+  const rubble::Features needs = rubble::features_of_scene(scene);
   rubble::ParticleStore<2> ps;
   rubble::generate_bodies<2>(scene, hfact, needs, ps);
   const rubble::Box<2> domain = rubble::domain_from_scene<2>(scene);
-  rubble::HydroCpu<2> sys(scene, ps, domain);
+  // as given: sorted and evaluated below, not by the stepper
+  rubble::CpuStepper<2> sys(scene, ps, domain, /*resumed=*/true);
   sys.sort_particles();
   const std::size_t np = ps.n;
   const std::vector<Real> rho_rest = ps.rho, u_rest = ps.u, h_rest = ps.h;

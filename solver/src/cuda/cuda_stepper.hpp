@@ -16,29 +16,12 @@
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_log.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/run.hpp"
 #include "rubble/scene/scene.hpp"
 
 namespace rubble {
 
-// What the CUDA backend has asked of the device so far in this process
-// (issue #15 item 5; process-wide because the stepper, its octree and the
-// benchmark's Barnes-Hut entry all count, and one host thread drives them).
-//   device_allocations     cudaMalloc calls: device buffers growing and the
-//                          caching allocator behind Thrust's temporary
-//                          storage filling up. Flat once a run's buffers
-//                          have reached their size (after its first step):
-//                          nothing is allocated inside a step.
-//   host_synchronisations  calls that make the host wait for the device:
-//                          a reduction's result, the octree's level counts,
-//                          a device-to-host copy. The count per step is
-//                          tabled at the top of cuda_stepper.cu.
-// Neither counts the synchronisations of RUBBLE_CUDA_SYNC_CHECK (a debug
-// mode) or the implicit one of cudaFree when a buffer grows.
-struct CudaBackendCounts {
-  std::int64_t device_allocations = 0;
-  std::int64_t host_synchronisations = 0;
-};
-CudaBackendCounts cuda_backend_counts();
+// cuda_backend_counts(): rubble/run.hpp.
 
 template <int D>
 class CudaStepper {

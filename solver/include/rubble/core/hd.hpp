@@ -22,3 +22,15 @@
 #define RUBBLE_HD_SMALL inline
 #endif
 #endif
+
+// RUBBLE_LAMBDA marks a loop body written once for both backends, as
+//   be.for_each("eos", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { ... });
+// (rubble/drivers/step_sequence.hpp): under nvcc an extended __device__
+// lambda that the CUDA backend launches as a kernel, otherwise a plain
+// lambda that the CPU backend runs in an OpenMP loop. It captures by value
+// only plain data (views, pointers, numbers): never `this`.
+#if defined(__CUDACC__)
+#define RUBBLE_LAMBDA __device__
+#else
+#define RUBBLE_LAMBDA
+#endif

@@ -42,7 +42,6 @@
 
 #include "rubble/core/box.hpp"
 #include "rubble/core/hd.hpp"
-#include "rubble/particles/particle_store.hpp"
 #include "rubble/particles/store_view.hpp"
 #include "rubble/physics/damage.hpp"
 #include "rubble/physics/viscosity_switch.hpp"
@@ -117,30 +116,52 @@ RUBBLE_HD_INLINE void leapfrog_kick_drift(const StoreView<D>& s, const LeapfrogH
   leapfrog_kick<D>(s, half_state, i, dt);  // predicted end-of-step values
 }
 
-// staggered: the staggered stress update (solids; the system's
-// evaluate_staggered(dt) advances S and rho between its passes).
+// The arrays a step keeps between its stages, owned by the system (so a
+// run allocates them once): Array is std::vector on the host, the CUDA
+// backend's device array there; Store a copy of the particle store
+// (ParticleStore, DeviceStore) for the RK2 stages.
+template <int D, template <class> class Array, class Store>
+struct IntegratorScratch {
+  Array<Vec<D>> v_half;
+  Array<Real> u_half, rho_half, alpha_half, alpha_start, damage_half, av_half;
+  Array<Mat<D>> S_half;
+  Store y0, y1;  // rk2_adaptive_step: y_n with k1, and the second stage with k2
+};
+
+// One kick-drift-kick step of `sys`, written once for every backend. The
+// system supplies (rubble/drivers/step_sequence.hpp, or a test's host
+// system): size(), view(), domain(), integrator_scratch(),
+// for_each(what, n, f) running f(i) for every particle, evaluate(), and
+// end_step(alpha_start, dt); with the staggered stress update also
+// evaluate_staggered(dt) (which advances S and rho between its passes).
 template <int D, class System>
-void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt, bool staggered = false) {
-  const std::size_t n = ps.n;
-  std::vector<Vec<D>> v_half(n);
-  std::vector<Real> u_half(n), rho_half(ps.drhodt.empty() || staggered ? 0 : n);
-  std::vector<Mat<D>> S_half(ps.dSdt.empty() || staggered ? 0 : n);  // solids: the deviatoric stress
-  std::vector<Real> alpha_half(ps.dalphadt.empty() ? 0 : n);  // porous materials: the distention
-  const std::vector<Real> alpha_start = ps.alpha;               // and its value at the start (end_step)
-  std::vector<Real> damage_half(ps.ddamage_root_dt.empty() ? 0 : n);  // damaged solids: delta = D^(1/d)
-  std::vector<Real> av_half(ps.dav_alpha_dt.empty() ? 0 : n);        // the viscosity switch's alpha
-  const LeapfrogHalf<D> half{v_half.data(),
-                             u_half.data(),
-                             rho_half.empty() ? nullptr : rho_half.data(),
-                             S_half.empty() ? nullptr : S_half.data(),
-                             alpha_half.empty() ? nullptr : alpha_half.data(),
-                             damage_half.empty() ? nullptr : damage_half.data(),
-                             av_half.empty() ? nullptr : av_half.data(),
+void leapfrog_step(System& sys, Real dt, bool staggered = false) {
+  const std::size_t n = sys.size();
+  const StoreView<D> s = sys.view();
+  auto& w = sys.integrator_scratch();
+  // the half-step arrays of the fields the run evolves (nullptr: not kicked)
+  auto half_array = [n](auto& array, bool used) {
+    if (!used) return decltype(array.data())(nullptr);
+    array.resize(n);
+    return array.data();
+  };
+  const LeapfrogHalf<D> half{half_array(w.v_half, true),
+                             half_array(w.u_half, true),
+                             half_array(w.rho_half, s.drhodt && !staggered),
+                             half_array(w.S_half, s.dSdt && !staggered),
+                             half_array(w.alpha_half, s.dalphadt != nullptr),
+                             half_array(w.damage_half, s.ddamage_root_dt != nullptr),
+                             half_array(w.av_half, s.dav_alpha_dt != nullptr),
                              staggered};
-  const StoreView<D> s = ps.view();
+  // porous materials: the distention at the start of the step (end_step)
+  Real* alpha_start = half_array(w.alpha_start, s.dalphadt != nullptr);
+  if (alpha_start) {
+    const Real* alpha = s.alpha;
+    sys.for_each("leapfrog alpha_n", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { alpha_start[i] = alpha[i]; });
+  }
   const Box<D> domain = sys.domain();
-#pragma omp parallel for if (n > 4096)
-  for (std::size_t i = 0; i < n; ++i) leapfrog_kick_drift<D>(s, half, domain, i, dt);
+  sys.for_each("leapfrog kick-drift", n,
+               [=] RUBBLE_LAMBDA(std::uint32_t i) { leapfrog_kick_drift<D>(s, half, domain, i, dt); });
   if constexpr (requires { sys.evaluate_staggered(dt); }) {
     if (staggered) sys.evaluate_staggered(dt);
     else sys.evaluate();
@@ -148,9 +169,8 @@ void leapfrog_step(System& sys, ParticleStore<D>& ps, Real dt, bool staggered = 
     if (staggered) throw std::logic_error("leapfrog_step: this system has no staggered evaluation");
     sys.evaluate();
   }
-#pragma omp parallel for if (n > 4096)
-  for (std::size_t i = 0; i < n; ++i) leapfrog_kick<D>(s, half, i, dt);
-  sys.end_step(alpha_start.empty() ? nullptr : alpha_start.data(), dt);
+  sys.for_each("leapfrog kick", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { leapfrog_kick<D>(s, half, i, dt); });
+  sys.end_step(alpha_start, dt);
 }
 
 }  // namespace rubble

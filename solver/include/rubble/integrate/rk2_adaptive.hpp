@@ -29,7 +29,6 @@
 #include "rubble/core/box.hpp"
 #include "rubble/core/hd.hpp"
 #include "rubble/integrate/leapfrog.hpp"
-#include "rubble/particles/particle_store.hpp"
 #include "rubble/particles/store_view.hpp"
 
 namespace rubble {
@@ -105,48 +104,55 @@ RUBBLE_HD_INLINE Real rk2_step_factor(Real err, Real tol) {
   return grow < Real(0.2) ? Real(0.2) : grow > Real(2) ? Real(2) : grow;
 }
 
+// The largest of two values, as std::max and thrust::maximum pick it.
+struct MaxOf {
+  RUBBLE_HD Real operator()(Real a, Real b) const { return a < b ? b : a; }
+};
+
+// One accepted step of `sys`, written once for every backend. Beyond what
+// leapfrog_step asks of the system (leapfrog.hpp): reduce(n, f, init, op),
+// and copies of the whole store: save_state(copy), restore_state(copy),
+// view_of(copy).
 template <int D, class System>
-Rk2Result rk2_adaptive_step(System& sys, ParticleStore<D>& ps, Real dt, Real tol, Real dt_min) {
-  const std::size_t n = ps.n;
-  ParticleStore<D> y0 = ps;  // state and k1 (its rates)
-  ParticleStore<D> y1;
-  const StoreView<D> v0 = y0.view();
-  StoreView<D> y = ps.view();
+Rk2Result rk2_adaptive_step(System& sys, Real dt, Real tol, Real dt_min) {
+  const std::size_t n = sys.size();
+  auto& w = sys.integrator_scratch();
+  sys.save_state(w.y0);  // state and k1 (its rates)
+  const StoreView<D> v0 = sys.view_of(w.y0);
   const Box<D> domain = sys.domain();
   int rejections = 0;
 
   for (;;) {
+    const StoreView<D> y = sys.view();
     // stage 2: y_n + dt k1
-#pragma omp parallel for if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, nullptr, dt, domain, i);
+    sys.for_each("rk2 stage 2", n,
+                 [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, nullptr, dt, domain, i); });
     sys.evaluate();
-    y1 = ps;  // k2 = rates of y1
-    const StoreView<D> v1 = y1.view();
+    sys.save_state(w.y1);  // k2 = rates of y1
+    const StoreView<D> v1 = sys.view_of(w.y1);
 
     // stage 3: y_n + dt/4 (k1 + k2)
     const Real q = Real(0.25) * dt;
-#pragma omp parallel for if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, q, domain, i);
-    sys.evaluate();  // k3 = rates in ps
+    sys.for_each("rk2 stage 3", n,
+                 [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, &v1, q, domain, i); });
+    sys.evaluate();  // k3 = rates in the store
 
     // Heun solution and the error against SSP-RK3
     const Real c23 = Real(2) / Real(3) * dt;
-    Real err = 0;
-#pragma omp parallel for reduction(max : err) if (n > 4096)
-    for (std::size_t i = 0; i < n; ++i) err = std::max(err, rk2_error_particle<D>(v0, v1, y, c23, i));
+    const Real err = sys.reduce(
+        n, [=] RUBBLE_LAMBDA(std::uint32_t i) { return rk2_error_particle<D>(v0, v1, y, c23, i); }, Real(0), MaxOf{});
 
     const Real factor = rk2_step_factor(err, tol);
     if (err <= tol || dt <= dt_min) {
       const Real h2 = Real(0.5) * dt;
-#pragma omp parallel for if (n > 4096)
-      for (std::size_t i = 0; i < n; ++i) rk2_combine<D>(y, v0, v0, &v1, h2, domain, i);
-      sys.end_step(y0.alpha.empty() ? nullptr : y0.alpha.data(), dt);
+      sys.for_each("rk2 final", n,
+                   [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, &v1, h2, domain, i); });
+      sys.end_step(v0.alpha, dt);
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};
     }
     // rejected: back to y_n with a smaller step
-    ps = y0;
-    y = ps.view();
+    sys.restore_state(w.y0);
     dt = std::max(dt * factor, dt_min);
     ++rejections;
   }

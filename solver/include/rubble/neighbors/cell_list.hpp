@@ -34,14 +34,11 @@
 #include "rubble/core/box.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/core/vec.hpp"
+#include "rubble/neighbors/search_radius.hpp"
 
 namespace rubble {
 
-// The CPU driver's search radius for summation density, as a multiple of
-// the particle's current support radius: the room h has to grow in the
-// smoothing-length iteration before its lists must be rebuilt
-// (hydro_cpu.cpp; also the memory estimate of initial_conditions.cpp).
-inline constexpr double kSearchSkin = 1.05;
+// The search radii both backends use: rubble/neighbors/search_radius.hpp.
 
 // The neighbour lists of n particles, each in ascending order, as the
 // search threads wrote them, in blocks owned by the thread that found them.

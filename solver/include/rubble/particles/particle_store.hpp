@@ -17,28 +17,11 @@
 #include "rubble/core/mat.hpp"
 #include "rubble/core/real.hpp"
 #include "rubble/core/vec.hpp"
+#include "rubble/particles/features.hpp"
 #include "rubble/particles/store_view.hpp"
 
 namespace rubble {
 
-// What a run needs; decided once from the scene.
-struct FieldNeeds {
-  bool continuity_density = false;  // rho is evolved (d rho/dt stored)
-  bool summation_density = false;   // grad-h factor omega is stored
-  bool conductivity = false;
-  bool gravity = false;             // self-gravity: a_grav and phi are stored
-  bool solid = false;               // a material has strength: S and dSdt are stored
-  bool boundary = false;            // a body is made of boundary particles
-  bool xsph = false;                // XSPH: the position-rate correction is stored
-  bool kernel_correction = false;   // solids with simulation.kernel_correction: K = C^T is stored
-  bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt are stored
-  bool plasticity = false;          // a solid material has a yield criterion: eps_p is stored
-  bool free_slip = false;           // a wall slides (free-slip or Coulomb): wall_normal is stored
-  bool wall_friction = false;       // a wall has Coulomb friction: wall_friction, wall_anchor, wall_grip are stored
-  bool inelastic_volume = false;    // a Drucker-Prager material (tension cracking, dilatancy): eps_v is stored
-  bool damage = false;              // a solid material has tensile damage: the damage and flaw fields are stored
-  bool viscosity_switch = false;    // a material has the viscosity switch: av_alpha and dav_alpha_dt are stored
-};
 
 template <int D>
 struct ParticleStore {
@@ -137,7 +120,7 @@ struct ParticleStore {
   std::vector<Vec<D>> wall_anchor;  // [m]
   std::vector<Vec<D>> wall_grip;    // [m/s^2]
 
-  void allocate(std::size_t count, const FieldNeeds& needs);
+  void allocate(std::size_t count, const Features& needs);
   // Apply a permutation: new particle i is old particle perm[i].
   void permute(const std::vector<std::uint32_t>& perm);
   std::vector<std::string> allocated_fields() const;
@@ -220,7 +203,7 @@ inline const std::vector<FieldInfo<D>>& field_table() {
 // ---- implementation -------------------------------------------------------
 
 template <int D>
-void ParticleStore<D>::allocate(std::size_t count, const FieldNeeds& needs) {
+void ParticleStore<D>::allocate(std::size_t count, const Features& needs) {
   n = count;
   m.assign(n, 0);
   material_id.assign(n, 0);

@@ -255,9 +255,9 @@ RUBBLE_HD_INLINE Real porosity_dalpha_dp(const EosParams& matrix, const Porosity
   switch (porosity_branch(matrix, pp, p, alpha)) {
     case PorosityBranch::Plastic: return crush_curve_dalpha_dp(pp, p);
     case PorosityBranch::Elastic: return porosity_elastic_dalpha_dp(matrix, pp, alpha);
-    case PorosityBranch::None:
-    default: return Real(0);
+    case PorosityBranch::None: break;
   }
+  return Real(0);
 }
 
 // dα/dt (header comment): the chain rule of J08 with the branch's dα/dp, only

@@ -30,12 +30,10 @@ std::vector<Vec<D>> lattice_points(BodyConfig b);
 // h = hfact (m/rho)^(1/D). Throws InputError if a body yields no particle or
 // a non-finite value. Returns where each body's particle ids begin: body k
 // holds ids [first[k], first[k + 1]) (size: bodies + 1).
-// The fields a run of this scene allocates (run_scene and the tools that
-// evaluate a scene's right-hand side outside the time loop).
-FieldNeeds field_needs(const Scene& scene);
+// The fields a run allocates: features_of_scene (rubble/drivers/run_physics.hpp).
 
 template <int D>
-std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const FieldNeeds& needs,
+std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const Features& needs,
                                           ParticleStore<D>& ps);
 
 // The body that generated particle `id`, from generate_bodies' `first`
@@ -57,7 +55,7 @@ double estimated_particle_count(const Scene& scene);
 // check's copy of the snapshot fields, the neighbour lists (4 bytes per
 // neighbour within the search radius) and the cell list's sorted copies.
 template <int D>
-std::size_t bytes_per_particle(const Scene& scene, const FieldNeeds& needs, double hfact);
+std::size_t bytes_per_particle(const Scene& scene, const Features& needs, double hfact);
 
 // Memory this process may use: RUBBLE_MEMORY_LIMIT (bytes) if set, else
 // the smaller of /proc/meminfo's MemAvailable and the cgroup limit; 0 if
@@ -71,7 +69,7 @@ std::string format_bytes(double bytes);
 // particles than a 32-bit id can number, or whose estimated memory exceeds
 // the available memory; the message gives the estimate.
 template <int D>
-void check_resources(const Scene& scene, const FieldNeeds& needs, double hfact);
+void check_resources(const Scene& scene, const Features& needs, double hfact);
 
 // Bodies whose particles come closer than half the particle spacing
 // (estimated per particle as h / hfact) overlap: an InputError naming both

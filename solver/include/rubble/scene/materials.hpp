@@ -1,7 +1,6 @@
 #pragma once
 // The material library (reference_data/materials/, one TOML file per
-// material, each with its source) and the bridge from a validated
-// MaterialConfig to the device-ready EOS parameters. Keys and rules:
+// material, each with its source). Keys and rules:
 // docs/scene.md, "Materials".
 #include <string>
 #include <vector>
@@ -26,7 +25,7 @@ std::vector<std::string> library_material_names();
 // the key and the problem.
 MaterialConfig load_material(const std::string& name_or_path, const std::vector<std::string>& overrides = {});
 
-// EOS parameters (with the add-on options) of a validated material.
-EosParams eos_params_from_material(const MaterialConfig& m);
+// The EOS parameters of a material: eos_params_from_material
+// (rubble/drivers/run_physics.hpp, with every scene-to-physics conversion).
 
 }  // namespace rubble

@@ -9,8 +9,11 @@
 #include <vector>
 
 #include "rubble/core/real.hpp"
+#include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/gravity.hpp"
 #include "rubble/physics/kernel_type.hpp"
+#include "rubble/physics/plasticity.hpp"
+#include "rubble/physics/porosity.hpp"
 
 namespace rubble {
 
@@ -21,7 +24,6 @@ enum class Integrator : int { RK2Adaptive = 0, Leapfrog = 1 };
 // velocity, "staggered" advances them a whole step with the strain rate of
 // the half-step velocity before the forces (the central-difference scheme).
 enum class StressUpdate : int { Predicted = 0, Staggered = 1 };
-enum class EosType : int { IdealGas = 0, Murnaghan = 1, Tillotson = 2 };
 
 struct SimulationConfig {
   int dimension = 0;                        // 1, 2 or 3 (required)
@@ -125,10 +127,9 @@ struct ArtificialStressConfig {
 
 // p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009); Murnaghan
 // and Tillotson matrices only. porosity = { model = "p_alpha", ... }; docs/scene.md.
-enum class CrushCurveType : int { Quadratic = 0, Steep = 1 };
 struct PorosityConfig {
   bool enabled = false;
-  CrushCurveType crush_curve = CrushCurveType::Quadratic;
+  CrushCurve crush_curve = CrushCurve::Quadratic;
   double alpha0 = 1;   // initial distention = alpha at the elastic limit (> 1)
   double p_e = 0;      // [Pa] elastic limit (>= 0)
   double p_s = 0;      // [Pa] full-compaction pressure (> p_e)
@@ -141,15 +142,13 @@ struct PorosityConfig {
 
 // Plasticity of a solid (shear_modulus > 0): von Mises or Drucker-Prager
 // (Bui, Fukagawa, Sako & Ohno 2008); plasticity = { model = ..., ... }.
-enum class PlasticityType : int { None = 0, VonMises = 1, DruckerPrager = 2 };
-enum class ConeFit : int { PlaneStrain = 0, Compression = 1, Extension = 2 };
 struct PlasticityConfig {
-  PlasticityType model = PlasticityType::None;
+  PlasticityModel model = PlasticityModel::None;
   double yield_stress = 0;     // [Pa] von Mises Y (> 0)
   double friction_angle = 0;   // [deg] Drucker-Prager phi, in [0, 90)
   double cohesion = 0;         // [Pa] c >= 0
   double dilatancy_angle = 0;  // [deg] psi, 0 <= psi <= phi
-  ConeFit cone = ConeFit::PlaneStrain;
+  DpConeFit cone = DpConeFit::PlaneStrain;
 };
 
 // Tensile damage of a solid (Grady & Kipp 1980; Benz & Asphaug 1994, 1995;
@@ -171,7 +170,7 @@ struct MaterialConfig {
   std::string library_file;  // the library file it was loaded from
   std::string source;        // library files: where the parameters come from
   std::string units;         // library files: "SI" or "dimensionless"
-  EosType eos = EosType::IdealGas;
+  EosKind eos = EosKind::IdealGas;
   double gamma = 0;     // ideal gas adiabatic index (> 1)
   MurnaghanConfig murnaghan;
   TillotsonConfig tillotson;

@@ -98,7 +98,6 @@ RUBBLE_HD_INLINE EosState eos_evaluate_raw(const EosParams& e, Real rho, Real u)
       break;
     }
     case EosKind::IdealGas:
-    default:
       s.p = ideal_gas_pressure(e.ideal_gas, rho, u);
       s.c2 = ideal_gas_sound_speed2(e.ideal_gas, rho, u);
       s.regime = EosRegime::IdealGas;
@@ -179,10 +178,19 @@ RUBBLE_HD_INLINE Real eos_internal_energy_from_pressure(const EosParams& e, Real
       }
       return hi;
     }
-    case EosKind::IdealGas:
-    default:
-      return p / ((e.ideal_gas.gamma - Real(1)) * rho);
+    case EosKind::IdealGas: break;
   }
+  return p / ((e.ideal_gas.gamma - Real(1)) * rho);  // the ideal gas
+}
+
+// Host helper: the EOS kind's name as scenes write it (`eos = "..."`).
+inline const char* eos_kind_name(EosKind k) {
+  switch (k) {  // no default: a new kind is a compiler warning here
+    case EosKind::IdealGas: return "ideal_gas";
+    case EosKind::Murnaghan: return "murnaghan";
+    case EosKind::Tillotson: return "tillotson";
+  }
+  return "unknown";
 }
 
 // Host helper: the regime's name as `rubble eos` prints it.

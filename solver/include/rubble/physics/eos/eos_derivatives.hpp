@@ -70,8 +70,7 @@ RUBBLE_HD_INLINE EosDerivatives eos_pressure_derivatives(const EosParams& e, Rea
           d.dp_du = x.dpdu;
           break;
         }
-        case TillotsonRegime::PartialVaporisation:
-        default: {
+        case TillotsonRegime::PartialVaporisation: {
           const TillotsonBranch c = tillotson_compressed(t, rho, u), x = tillotson_expanded(t, rho, u);
           const Real width = t.E_cv - t.E_iv;
           const Real wc = (t.E_cv - u) / width, we = (u - t.E_iv) / width;
@@ -83,7 +82,6 @@ RUBBLE_HD_INLINE EosDerivatives eos_pressure_derivatives(const EosParams& e, Rea
       break;
     }
     case EosKind::IdealGas:
-    default:
       d.dp_drho = (e.ideal_gas.gamma - Real(1)) * u;
       d.dp_du = (e.ideal_gas.gamma - Real(1)) * rho;
       break;

@@ -150,8 +150,7 @@ RUBBLE_HD_INLINE TillotsonState tillotson_evaluate(const TillotsonParams& t, Rea
       s.c2 = e.dpdrho + e.p / rho2 * e.dpdu;
       break;
     }
-    case TillotsonRegime::PartialVaporisation:
-    default: {
+    case TillotsonRegime::PartialVaporisation: {
       const TillotsonBranch c = tillotson_compressed(t, rho, u), e = tillotson_expanded(t, rho, u);
       const Real width = t.E_cv - t.E_iv;
       const Real wc = (t.E_cv - u) / width, we = (u - t.E_iv) / width;
@@ -181,8 +180,10 @@ RUBBLE_HD_INLINE TillotsonBranch tillotson_hot_share(const TillotsonParams& t, R
       const Real we = (u - t.E_iv) / width;
       return TillotsonBranch{we * x.p, we * x.dpdrho, we * x.dpdu + x.p / width};
     }
-    default: return TillotsonBranch{Real(0), Real(0), Real(0)};
+    case TillotsonRegime::Compressed:
+    case TillotsonRegime::ExpandedCold: break;  // cold: no hot share
   }
+  return TillotsonBranch{Real(0), Real(0), Real(0)};
 }
 
 // Host helper: the regime's name as `rubble eos` prints it.

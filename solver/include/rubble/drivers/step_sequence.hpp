@@ -1,0 +1,494 @@
+#pragma once
+// The step, written once for both backends (issue #51): what one
+// evaluation of the right-hand side does and in which order, what happens
+// at the end of an accepted step, the two integrators (integrate/), the
+// state check and the time-step limit. The backend supplies only what
+// differs between a CPU and a GPU: its particle and neighbour loops, its
+// reductions, where arrays live, the sort along the space-filling curve,
+// the neighbour search, self-gravity, and (CPU) loops that take each pair
+// once. The loop bodies are the RUBBLE_HD functions of particle_rates.hpp;
+// each runs here as a RUBBLE_LAMBDA (core/hd.hpp), which the CPU backend
+// calls in an OpenMP loop and the CUDA backend launches as a kernel.
+//
+// What a backend B<D> provides (CpuBackend in solver/src/cpu_backend.hpp,
+// CudaBackend in solver/src/cuda/cuda_stepper.cu):
+//   template <class T> using Array    resize(n), data(), size()
+//   using Store                      a copy of the whole store (RK2 stages)
+//   using Neighbours, OwnNeighbours  the `each` its neighbour loops pass
+//   size(), view(), materials()      the store and the material table as
+//                                    the loop bodies read them
+//   for_each(what, n, f)             f(i) for i < n
+//   for_each_neighbours(what, f)     f(i, Neighbours) for every particle,
+//                                    the pairs of the last search
+//   for_each_in_own_radius(what, R, f)  the same, offering each particle
+//                                    only the b within its own R (summation
+//                                    density's Newton iterations)
+//   reduce(n, f, init, op)           op over f(i)
+//   integrator_scratch(), save_state, restore_state, view_of
+//   sort(domain)                     space-filling-curve order
+//   search(R, keepable)              pairs within max(R_a, R_b)
+//   search_still_holds(R)            whether the last keepable search still
+//                                    lists every pair that can interact
+//   self_gravity(view)               a_grav and phi (3-D)
+//   hydro_pair_once(c), solid_gradients_pair_once(c, count),
+//   solid_forces_pair_once(c)        a backend's own pair loops (false:
+//                                    none, the gather loops here run)
+//   zero(array), read_count(array)   a counter set to 0, read on the host
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "rubble/core/atomic.hpp"
+#include "rubble/core/box.hpp"
+#include "rubble/core/error.hpp"
+#include "rubble/core/hd.hpp"
+#include "rubble/drivers/particle_rates.hpp"
+#include "rubble/drivers/run_physics.hpp"
+#include "rubble/drivers/state_check.hpp"
+#include "rubble/integrate/leapfrog.hpp"
+#include "rubble/integrate/rk2_adaptive.hpp"
+#include "rubble/neighbors/search_radius.hpp"
+
+namespace rubble {
+
+// Wall seconds spent in each part of the right-hand side, summed over the
+// run (what `rubble run --timings` and the benchmarks print). On the CUDA
+// backend the clock reads the host's launches, not the device's work.
+struct RhsPhaseSeconds {
+  double neighbours = 0;  // neighbour search
+  double density = 0;     // summation density and h (or h from continuity density)
+  double eos = 0;         // pressure and sound speed (and the plastic return in an evaluation)
+  double forces = 0;      // rates: pressure, viscosity, conductivity, stress, gravity, XSPH, walls
+  double end_step = 0;    // porosity, plasticity and shifting after a step
+};
+
+// Adds the wall time of its scope to `sum`.
+class ScopedSeconds {
+ public:
+  explicit ScopedSeconds(double& sum) : sum_(sum), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedSeconds() { sum_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  ScopedSeconds(const ScopedSeconds&) = delete;
+  ScopedSeconds& operator=(const ScopedSeconds&) = delete;
+
+ private:
+  double& sum_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// The state check after a step and the next step's time-step limit read
+// the same state: one reduction.
+struct StateCheck {
+  std::size_t first_bad;  // the first particle with a non-finite value (n: none)
+  Real dt;                // the smallest per-particle time-step limit
+};
+
+struct StateCheckMin {
+  RUBBLE_HD StateCheck operator()(const StateCheck& a, const StateCheck& b) const {
+    return {a.first_bad < b.first_bad ? a.first_bad : b.first_bad, a.dt < b.dt ? a.dt : b.dt};
+  }
+};
+
+struct CountSum {
+  RUBBLE_HD unsigned long long operator()(unsigned long long a, unsigned long long b) const { return a + b; }
+};
+
+// Every member function that holds a loop body is public: nvcc's extended
+// lambdas may not live in private member functions.
+template <int D, class Backend>
+class StepSequence {
+ public:
+  template <class T>
+  using Array = typename Backend::template Array<T>;
+  using Neighbours = typename Backend::Neighbours;
+  using OwnNeighbours = typename Backend::OwnNeighbours;
+
+  StepSequence(const RunPhysics& physics, Backend& backend, const Box<D>& domain)
+      : ph_(physics), on_(physics.on), be_(backend), domain_(domain) {
+    for (int k = 0; k < D; ++k) g_[k] = physics.body_force[k];
+    const std::size_t n = be_.size();
+    search_radius_.resize(n);
+    if (on_.summation_density) flags_.resize(n);
+    if (on_.solid && on_.artificial_stress) art_R_.resize(n);
+    fallbacks_.resize(1);
+    be_.zero(fallbacks_);
+  }
+
+  // ---- what the integrators ask of a system (integrate/)
+  std::size_t size() const { return be_.size(); }
+  StoreView<D> view() const { return be_.view(); }
+  const Box<D>& domain() const { return domain_; }
+  auto& integrator_scratch() { return be_.integrator_scratch(); }
+  template <class F>
+  void for_each(const char* what, std::size_t n, F f) {
+    be_.for_each(what, n, f);
+  }
+  template <class T, class F, class Op>
+  T reduce(std::size_t n, F f, T init, Op op) {
+    return be_.reduce(n, f, init, op);
+  }
+  template <class S>
+  void save_state(S& copy) {
+    be_.save_state(copy);
+  }
+  template <class S>
+  void restore_state(const S& copy) {
+    be_.restore_state(copy);
+  }
+  template <class S>
+  StoreView<D> view_of(S& copy) {
+    return be_.view_of(copy);
+  }
+
+  // ---- the time loop's interface
+  void sort_particles() { be_.sort(domain_); }
+  void leapfrog(Real dt) {
+    dt_known_ = false;
+    leapfrog_step<D>(*this, dt, on_.staggered);
+  }
+  Rk2Result rk2(Real dt, Real tol, Real dt_min) {
+    dt_known_ = false;
+    return rk2_adaptive_step<D>(*this, dt, tol, dt_min);
+  }
+  // Relaxation: every velocity times f.
+  void damp(Real f) {
+    dt_known_ = false;
+    const StoreView<D> s = view();
+    be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.v[i] *= f; });
+  }
+
+  // The first particle with a non-finite state (size(): none) and the time-
+  // step limit of the same state, in one pass; the limit is kept for
+  // dt_limit() until the state changes.
+  StateCheck check_state() {
+    const RhsContext<D> c = context();
+    const std::size_t n = size();
+    const StateCheck r = be_.reduce(
+        n,
+        [=] RUBBLE_LAMBDA(std::uint32_t i) {
+          return StateCheck{finite_particle<D>(c.s, i) ? n : std::size_t(i), dt_limit_particle<D>(c, i)};
+        },
+        StateCheck{n, Real(1e30)}, StateCheckMin{});
+    dt_cached_ = r.dt;
+    dt_known_ = true;
+    return r;
+  }
+  // Largest stable time step at the last evaluated state (Courant and force limits).
+  Real dt_limit() {
+    if (!dt_known_) check_state();
+    return dt_cached_;
+  }
+
+  // ---- the right-hand side
+  // Density (and h), pressure, sound speed, and all time derivatives at the
+  // current state of the store.
+  void evaluate() {
+    ++evaluations_;
+    dt_known_ = false;
+    if (on_.summation_density) summation_density_and_h();
+    else h_from_continuity_density();
+    {
+      const ScopedSeconds timer(phases_.eos);
+      equation_of_state();
+      if (on_.plasticity) plastic_return(false);
+    }
+    const ScopedSeconds timer(phases_.forces);
+    if (on_.wall_extrapolation) wall_extrapolation();
+    if (on_.solid) solid_rates();  // the feature set is fixed for the run
+    else hydro_rates();
+    if (on_.gravity) self_gravity();
+    if (on_.body_force) body_force();
+    if (on_.boundary) hold_boundaries();
+    if (on_.xsph) xsph_velocity();
+  }
+
+  // The same, for a leapfrog step with the staggered stress update
+  // (simulation.stress_update = "staggered", leapfrog.hpp): the store holds
+  // v_{1/2} and the step's starting S and rho; between the two solid passes
+  // S and rho advance by dt with pass 1's rates (staggered_update_particle),
+  // so the forces are those of the step's end.
+  void evaluate_staggered(Real dt) {
+    struct Reset {
+      Real& v;
+      ~Reset() { v = Real(0); }
+    } reset{stagger_dt_};
+    stagger_dt_ = on_.solid ? dt : Real(0);
+    if (stagger_dt_ > Real(0)) {
+      const std::size_t n = size();
+      stagger_Lm_.resize(n);
+      stagger_du_.resize(n);
+      if (art_R_.size()) as_chi_.resize(n);
+    }
+    evaluate();
+  }
+
+  // After the integrator's last update of a step: porous states back onto
+  // the loading envelope, the damage cap, the viscosity switch's bounds, the
+  // plastic return mapping (with plastic-strain accumulation) at the step's
+  // final state, particle shifting and the Coulomb walls' anchors. Nothing
+  // when none is used. alpha_start: the distention at the start of the step
+  // (porous runs).
+  void end_step(const Real* alpha_start, Real dt) {
+    if (!(on_.porosity || on_.plasticity || on_.damage || on_.viscosity_switch || on_.wall_friction || on_.shifting))
+      return;
+    const ScopedSeconds timer(phases_.end_step);
+    const std::size_t n = size();
+    const RhsContext<D> c = context();
+    if (on_.porosity)
+      be_.for_each("end-of-step porosity", n, [=] RUBBLE_LAMBDA(std::uint32_t i) {
+        porosity_end_step_particle<D>(c, i, alpha_start);
+      });
+    if (on_.damage)
+      be_.for_each("end-of-step damage cap", n,
+                   [=] RUBBLE_LAMBDA(std::uint32_t i) { damage_end_step_particle<D>(c, i); });
+    if (on_.viscosity_switch)
+      be_.for_each("end-of-step viscosity switch bounds", n,
+                   [=] RUBBLE_LAMBDA(std::uint32_t i) { viscosity_switch_end_step_particle<D>(c, i); });
+    if (on_.plasticity || on_.porosity || on_.damage) {
+      // The pressure of the final state: the plastic return works at fixed p,
+      // and the stored p, c_s of a leapfrog step then belong to the state it
+      // returns (snapshots, the next step limit), not to its predicted state.
+      equation_of_state();
+      if (on_.plasticity) plastic_return(true);
+    }
+    if (on_.shifting) shift_particles(dt);
+    if (on_.wall_friction)  // after the shift: a shift along a wall stretches the friction spring like any motion
+      be_.for_each("end-of-step wall friction anchors", n,
+                   [=] RUBBLE_LAMBDA(std::uint32_t i) { wall_anchor_end_step_particle<D>(c, i); });
+  }
+
+  // ---- counters
+  std::int64_t evaluations() const { return evaluations_; }
+  // Kernel-gradient correction: particle evaluations where the correction
+  // matrix was ill-conditioned and the identity was used instead.
+  std::int64_t correction_fallbacks() const { return be_.read_count(fallbacks_); }
+  const RhsPhaseSeconds& phase_seconds() const { return phases_; }
+  const Features& features() const { return on_; }
+
+  // Frees what only the steps need (the run is over).
+  void release_work_memory() {
+    search_radius_ = {};
+    flags_ = {};
+    solid_inv_ = {};
+    stagger_Lm_ = {};
+    stagger_du_ = {};
+    as_chi_ = {};
+    shift_ = {};
+  }
+
+  // ---- the passes of an evaluation (public for nvcc, see above)
+  RhsContext<D> context() {
+    RhsContext<D> c;
+    c.s = be_.view();
+    c.mat = be_.materials();
+    c.domain = domain_;
+    c.kernel = ph_.kernel;
+    c.hfact = ph_.hfact;
+    c.summation = on_.summation_density;
+    c.kernel_correction = on_.kernel_correction;
+    c.stress_diffusion = on_.stress_diffusion;
+    c.art_R = art_R_.size() ? art_R_.data() : nullptr;
+    c.xsph_epsilon = ph_.xsph_epsilon;
+    c.courant = ph_.courant;
+    c.force_factor = ph_.force_factor;
+    c.h_tolerance = ph_.h_tolerance;
+    c.body_force = g_;
+    c.has_body_force = on_.body_force;
+    c.stagger_dt = stagger_dt_;
+    if (stagger_dt_ > Real(0)) {
+      c.stagger_Lm = stagger_Lm_.data();
+      c.stagger_du = stagger_du_.data();
+      c.as_chi = as_chi_.size() ? as_chi_.data() : nullptr;
+    }
+    return c;
+  }
+
+  // Summation density with h and rho solved together (smoothing_length.hpp),
+  // over lists searched at kSearchSkin h; a particle whose h grows past its
+  // search radius searches again at kRegrowSkin times the h it reached.
+  void summation_density_and_h() {
+    const std::size_t n = size();
+    Real* R = search_radius_.data();
+    int* outgrown = flags_.data();
+    const StoreView<D> s = view();
+    be_.for_each("search radius", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { R[i] = Real(kSearchSkin) * s.h[i]; });
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      {
+        const ScopedSeconds timer(phases_.neighbours);
+        be_.search(R, false);
+      }
+      const RhsContext<D> c = context();
+      {
+        const ScopedSeconds timer(phases_.density);
+        be_.for_each_in_own_radius("summation density", R, [=] RUBBLE_LAMBDA(std::uint32_t i, const OwnNeighbours& each) {
+          outgrown[i] = summation_density_particle<D>(c, i, R[i], each) ? 0 : 1;
+        });
+      }
+      // The force loop needs all pairs within max(h_a, h_b): the lists hold
+      // all pairs within max(R_a, R_b), which is at least that.
+      const unsigned long long grown = be_.reduce(
+          n, [=] RUBBLE_LAMBDA(std::uint32_t i) { return (unsigned long long)outgrown[i]; }, 0ull, CountSum{});
+      if (grown == 0) return;
+      be_.for_each("grown search radius", n, [=] RUBBLE_LAMBDA(std::uint32_t i) {
+        if (outgrown[i]) R[i] = Real(kRegrowSkin) * s.h[i];
+      });
+    }
+    throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
+  }
+
+  // Continuity density: h follows rho. A backend may keep its last search
+  // while it still lists every pair that can interact (its entries beyond
+  // both supports add nothing, so the sums are those of a new search).
+  void h_from_continuity_density() {
+    const std::size_t n = size();
+    const RhsContext<D> c = context();
+    {
+      const ScopedSeconds timer(phases_.density);
+      be_.for_each("h from density", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { h_from_density_particle<D>(c, i); });
+    }
+    Real* R = search_radius_.data();
+    if (be_.search_still_holds(R)) return;
+    const StoreView<D> s = c.s;
+    be_.for_each("search radius", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { R[i] = Real(kSearchSkin) * s.h[i]; });
+    const ScopedSeconds timer(phases_.neighbours);
+    be_.search(R, true);
+  }
+
+  void equation_of_state() {
+    const RhsContext<D> c = context();
+    be_.for_each("equation of state", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { eos_particle<D>(c, i); });
+  }
+
+  // Yield: S back onto the surface (accumulate: the step's plastic strain).
+  void plastic_return(bool accumulate) {
+    const RhsContext<D> c = context();
+    be_.for_each("plastic return", size(),
+                 [=] RUBBLE_LAMBDA(std::uint32_t i) { plastic_return_particle<D>(c, i, accumulate); });
+  }
+
+  // Extrapolated walls: p, S, rho, c_s of the wall particles from the free
+  // particles' state of this evaluation (after their EOS and plastic return).
+  void wall_extrapolation() {
+    const RhsContext<D> c = context();
+    be_.for_each_neighbours("wall extrapolation", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+      wall_extrapolation_particle<D>(c, i, each);
+    });
+  }
+
+  // Feature set Hydro: pressure, viscosity, conductivity (and the porous
+  // and switch rates).
+  void hydro_rates() {
+    const RhsContext<D> c = context();
+    if (be_.hydro_pair_once(c)) return;
+    be_.for_each_neighbours("hydro rates", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+      hydro_rates_particle<D>(c, i, each);
+    });
+  }
+
+  // Feature set Solid (any material with a shear modulus; continuity
+  // density). Pass 1: the velocity gradient L_a (optionally with the
+  // kernel-gradient correction), the Jaumann stress rate and the
+  // artificial stress tensor R_a. Pass 2: the pair forces from the full
+  // stress (solid_pair). Both passes divide by every neighbour's H (kernel)
+  // and pass 2 by its rho^2 (stress term): these inverses are taken once
+  // per particle first (solid_inverses; the same values as at each pair).
+  // With the staggered update, S and rho advance between the passes.
+  void solid_rates() {
+    const std::size_t n = size();
+    RhsContext<D> c = context();
+    solid_inv_.resize(n);
+    SolidInverses* inv = solid_inv_.data();
+    const StoreView<D> s = c.s;
+    be_.for_each("solid inverses", n,
+                 [=] RUBBLE_LAMBDA(std::uint32_t i) { inv[i] = solid_inverses(s.h[i], s.rho[i]); });
+    c.solid_inv = inv;
+    unsigned long long* fallbacks = fallbacks_.data();
+    if (!be_.solid_gradients_pair_once(c, fallbacks))
+      be_.for_each_neighbours("solid velocity gradient", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+        if (!solid_gradient_particle<D>(c, i, each)) atomic_increment(fallbacks);  // rare
+      });
+    const bool staggered = c.stagger_dt > Real(0);
+    if (staggered) {  // pass 2 then divides by the new densities
+      const bool plastic = on_.plasticity;
+      be_.for_each("staggered stress update", n, [=] RUBBLE_LAMBDA(std::uint32_t i) {
+        staggered_update_particle<D>(c, i, plastic);
+        inv[i] = solid_inverses(s.h[i], s.rho[i]);
+      });
+    }
+    if (!be_.solid_forces_pair_once(c))
+      be_.for_each_neighbours("solid rates", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+        solid_rates_particle<D>(c, i, each);
+      });
+    if (staggered)
+      be_.for_each("staggered energy rate", n,
+                   [=] RUBBLE_LAMBDA(std::uint32_t i) { staggered_energy_particle<D>(c, i); });
+  }
+
+  // Self-gravity (3-D only): a_grav and phi from direct summation or the
+  // octree, softened with h (or a fixed length); a_grav is added to dv/dt.
+  void self_gravity() {
+    const StoreView<D> s = view();
+    be_.self_gravity(s);
+    be_.for_each("gravity into dv/dt", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.dvdt[i] += s.a_grav[i]; });
+  }
+
+  // simulation.gravity
+  void body_force() {
+    const RhsContext<D> c = context();
+    be_.for_each("body force", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { body_force_particle<D>(c, i); });
+  }
+
+  void hold_boundaries() {
+    const RhsContext<D> c = context();
+    be_.for_each("hold boundaries", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { hold_boundary_particle<D>(c, i); });
+  }
+
+  // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp).
+  void xsph_velocity() {
+    const RhsContext<D> c = context();
+    be_.for_each_neighbours("xsph", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+      xsph_particle<D>(c, i, each);
+    });
+  }
+
+  // Particle shifting (physics/particle_shifting.hpp) with the neighbours
+  // of the last evaluation: exact for leapfrog, whose last evaluation is at
+  // the final positions; for rk2_adaptive the final positions differ by the
+  // step's last correction, and a pair that has just entered the support is
+  // missed (its kernel terms vanish at the support's edge).
+  void shift_particles(Real dt) {
+    const std::size_t n = size();
+    const RhsContext<D> c = context();
+    shift_.resize(n);
+    Vec<D>* out = shift_.data();
+    const Real A = ph_.shifting;
+    be_.for_each_neighbours("particle shifting", [=] RUBBLE_LAMBDA(std::uint32_t i, const Neighbours& each) {
+      shifting_particle<D>(c, i, A, dt, out, each);
+    });
+    const Box<D> dom = domain_;
+    const StoreView<D> s = c.s;
+    be_.for_each("apply shifts", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { s.x[i] = dom.wrap(s.x[i] + out[i]); });
+  }
+
+ private:
+  const RunPhysics& ph_;
+  Features on_;
+  Backend& be_;
+  Box<D> domain_;
+  Vec<D> g_ = Vec<D>::zero();  // simulation.gravity
+  Array<Real> search_radius_;
+  Array<int> flags_;                   // summation density: whose h outgrew its radius
+  Array<Mat<D>> art_R_;                // solids with artificial stress: R_a
+  Array<SolidInverses> solid_inv_;     // solids: 1/H, 1/rho^2 per particle
+  Array<Mat<D>> stagger_Lm_;           // staggered: pass 1's mass-weighted gradient
+  Array<Real> stagger_du_, as_chi_;    // ... the energy rate's correction, chi_a
+  Array<Vec<D>> shift_;                // particle shifting: this step's shifts
+  Array<unsigned long long> fallbacks_;  // kernel-gradient correction fallbacks (1 entry)
+  Real stagger_dt_ = 0;                // inside evaluate_staggered: its dt (0 otherwise)
+  std::int64_t evaluations_ = 0;
+  RhsPhaseSeconds phases_;
+  bool dt_known_ = false;  // dt_cached_ is the limit of the current state
+  Real dt_cached_ = 0;
+};
+
+}  // namespace rubble

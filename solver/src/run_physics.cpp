@@ -1,0 +1,167 @@
+// Scene -> physics, built once per run (rubble/drivers/run_physics.hpp).
+#include "rubble/drivers/run_physics.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "rubble/drivers/particle_rates.hpp"
+#include "rubble/physics/kernels.hpp"
+
+namespace rubble {
+
+Features features_of_scene(const Scene& scene) {
+  const SimulationConfig& sim = scene.simulation;
+  Features on;
+  on.summation_density = sim.density == DensityForm::Summation;
+  on.continuity_density = sim.density == DensityForm::Continuity;
+  on.gravity = scene.gravity.mode != GravityMode::Off;
+  for (const MaterialConfig& m : scene.materials) {
+    const bool solid = m.shear_modulus > 0;
+    on.solid = on.solid || solid;
+    on.porosity = on.porosity || m.porosity.enabled;
+    on.plasticity = on.plasticity || m.plasticity.model != PlasticityModel::None;
+    // every Drucker-Prager material stores eps_v: its tension-cracking
+    // opening persists (and so does dilatant flow, psi > 0)
+    on.inelastic_volume = on.inelastic_volume || m.plasticity.model == PlasticityModel::DruckerPrager;
+    on.damage = on.damage || m.damage.enabled;
+    on.viscosity_switch = on.viscosity_switch || m.viscosity.switch_on;
+    on.artificial_stress = on.artificial_stress || (solid && m.artificial_stress.enabled && m.artificial_stress.n > 0);
+    on.stress_diffusion = on.stress_diffusion || (solid && m.stress_diffusion > 0);
+  }
+  for (const BodyConfig& b : scene.bodies) {
+    const bool wall = b.boundary != BoundaryKind::None;
+    on.boundary = on.boundary || wall;
+    on.free_slip = on.free_slip || b.sliding_wall();
+    on.wall_friction = on.wall_friction || b.wall_slip == WallSlip::Coulomb;
+    on.wall_extrapolation = on.wall_extrapolation || (wall && b.boundary_state == BoundaryState::Extrapolated);
+  }
+  on.xsph = sim.xsph > 0;
+  on.kernel_correction = on.solid && sim.kernel_correction;
+  for (int k = 0; k < 3; ++k) on.body_force = on.body_force || sim.gravity[k] != 0;
+  on.shifting = sim.shifting > 0;
+  on.staggered = on.solid && sim.stress_update == StressUpdate::Staggered;
+  return on;
+}
+
+double smoothing_factor(const SimulationConfig& sim) {
+  return sim.hfact > 0 ? sim.hfact : kernel_default_hfact(sim.kernel);
+}
+
+EosParams eos_params_from_material(const MaterialConfig& m) {
+  EosParams e;
+  e.kind = m.eos;
+  switch (m.eos) {  // no default: a new EOS kind is a compiler warning here
+    case EosKind::Murnaghan: e.murnaghan = {Real(m.murnaghan.rho0), Real(m.murnaghan.K0), Real(m.murnaghan.n)}; break;
+    case EosKind::Tillotson: {
+      const TillotsonConfig& t = m.tillotson;
+      e.tillotson = {Real(t.rho0), Real(t.A),  Real(t.B), Real(t.E0),    Real(t.E_iv),
+                     Real(t.E_cv), Real(t.a),  Real(t.b), Real(t.alpha), Real(t.beta)};
+      break;
+    }
+    case EosKind::IdealGas: e.ideal_gas.gamma = Real(m.gamma); break;
+  }
+  e.limits.rho_limit = Real(m.eos_options.rho_limit);
+  e.limits.p_min_enabled = m.eos_options.p_min_enabled;
+  e.limits.p_min = Real(m.eos_options.p_min);
+  e.limits.cs_min = Real(m.eos_options.cs_min);
+  e.limits.cs_floor = m.eos_options.cs_floor;
+  return e;
+}
+
+PorosityParams porosity_params_from_config(const PorosityConfig& c) {
+  PorosityParams p{};
+  p.enabled = c.enabled;
+  if (!c.enabled) return p;
+  p.curve = c.crush_curve;
+  p.alpha_e = Real(c.alpha0);
+  p.p_e = Real(c.p_e);
+  p.p_s = Real(c.p_s);
+  p.p_t = Real(c.p_t);
+  p.alpha_t = Real(c.alpha_t);
+  p.n1 = Real(c.n1);
+  p.n2 = Real(c.n2);
+  p.c_e = Real(c.c_e);
+  p.c_s0 = Real(c.c_s0);
+  return p;
+}
+
+PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
+  switch (c.model) {  // no default: a new model is a compiler warning here
+    case PlasticityModel::VonMises: return von_mises_params(Real(c.yield_stress));
+    case PlasticityModel::DruckerPrager:
+      return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle), c.cone);
+    case PlasticityModel::None: break;
+  }
+  return PlasticityParams{};
+}
+
+DamageParams damage_params_from_config(const DamageConfig& c) {
+  DamageParams d{};
+  d.enabled = c.enabled;
+  if (!c.enabled) return d;
+  d.weibull_k = Real(c.weibull_k);
+  d.weibull_m = Real(c.weibull_m);
+  d.crack_speed = Real(c.crack_speed);
+  d.deviatoric = c.deviatoric;
+  d.capped = c.capped;
+  return d;
+}
+
+std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
+  std::vector<MaterialParams> out;
+  for (const auto& m : scene.materials) {
+    MaterialParams p{};
+    p.eos = eos_params_from_material(m);  // EOS and its add-on options (issue #3)
+    p.av = {Real(m.viscosity.alpha), Real(m.viscosity.beta)};
+    p.av_switch.enabled = m.viscosity.switch_on;
+    p.av_switch.alpha_min = Real(m.viscosity.alpha_min);
+    p.av_switch.decay = Real(m.viscosity.decay);
+    p.alpha_u = m.conductivity.enabled ? Real(m.conductivity.alpha_u) : Real(0);
+    p.shear_modulus = Real(m.shear_modulus);
+    const bool as = m.artificial_stress.enabled && m.shear_modulus > 0;
+    p.as_epsilon = as ? Real(m.artificial_stress.epsilon) : Real(0);
+    p.as_exponent = as ? Real(m.artificial_stress.n) : Real(0);
+    const bool clumping = m.artificial_stress.form == ArtificialStressForm::Clumping;
+    p.as_clump_onset = clumping ? Real(m.artificial_stress.clump_onset) : Real(0);
+    p.as_clump_full = clumping ? Real(m.artificial_stress.clump_full) : Real(0);
+    p.porosity = porosity_params_from_config(m.porosity);
+    p.plasticity = plasticity_params_from_config(m.plasticity);
+    p.damage = damage_params_from_config(m.damage);
+    p.stress_diffusion = Real(m.stress_diffusion);
+    // Jaky's (1944) K0 = 1 - sin phi for a granular material (Feng et al.
+    // 2021); other solids get no geostatic correction of the deviator
+    p.k0 = m.plasticity.model == PlasticityModel::DruckerPrager
+               ? Real(1 - std::sin(m.plasticity.friction_angle * std::numbers::pi / 180))
+               : Real(1);
+    // dp: the lattice spacing of the first body of this material (the
+    // artificial stress's W(dp); Gray, Monaghan & Swift 2001)
+    p.dp = 0;
+    const int id = static_cast<int>(out.size());
+    for (const auto& b : scene.bodies)
+      if (b.material_id == id && b.spacing > 0) {
+        p.dp = Real(b.spacing);
+        break;
+      }
+    out.push_back(p);
+  }
+  return out;
+}
+
+RunPhysics run_physics(const Scene& scene) {
+  const SimulationConfig& sim = scene.simulation;
+  RunPhysics r;
+  r.on = features_of_scene(scene);
+  r.materials = material_params_from_scene(scene);
+  r.kernel = sim.kernel;
+  r.hfact = Real(smoothing_factor(sim));
+  r.courant = Real(sim.courant);
+  r.force_factor = Real(sim.force_factor);
+  r.h_tolerance = h_iteration_tolerance(sim.h_tolerance);
+  r.xsph_epsilon = Real(sim.xsph);
+  r.shifting = Real(sim.shifting);
+  for (int k = 0; k < 3; ++k) r.body_force[k] = Real(sim.gravity[k]);
+  r.gravity = scene.gravity;
+  return r;
+}
+
+}  // namespace rubble
