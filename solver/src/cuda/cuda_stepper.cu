@@ -1,7 +1,10 @@
 // The CUDA backend (issue #6): device-resident particles, a cell list over a
-// device radix sort, and the same per-particle loop bodies as the CPU
-// driver. See cuda_stepper.hpp for the interface and DESIGN.md principles
-// 1, 4, 5 and 6 for why it is shaped this way.
+// device radix sort, and the step sequence the CPU runs
+// (rubble/drivers/step_sequence.hpp; issue #51): this file supplies only
+// the backend (CudaBackend below: loops as kernels, reductions, device
+// arrays, sort, search, gravity). See cuda_stepper.hpp for the time loop's
+// interface and DESIGN.md principles 1, 4, 5 and 6 for why it is shaped
+// this way.
 //
 // What runs where:
 //   sort_particles   Morton keys of the positions (morton.hpp), a stable
@@ -26,8 +29,10 @@
 //                    into a list in thread-local memory and reuses it over
 //                    its smoothing-length Newton iterations
 //                    (candidate_list.hpp).
-//   right-hand side  one kernel per loop body of rubble/drivers/particle_rates.hpp.
-//   integrators      the per-particle steps of leapfrog.hpp and rk2_adaptive.hpp.
+//   right-hand side  one kernel per pass of the step sequence, each a loop
+//                    body of rubble/drivers/particle_rates.hpp.
+//   integrators      leapfrog_step and rk2_adaptive_step (integrate/), their
+//                    per-particle steps as kernels.
 //   reductions       time-step limit, conserved sums, finiteness, counts:
 //                    thrust::transform_reduce over the particle index.
 // The sums over neighbours run in cell order, not in ascending index order
@@ -91,7 +96,8 @@
 #include "rubble/core/error.hpp"
 #include "rubble/drivers/material_params.hpp"
 #include "rubble/drivers/particle_rates.hpp"
-#include "rubble/drivers/rhs_features.hpp"
+#include "rubble/drivers/run_physics.hpp"
+#include "rubble/drivers/step_sequence.hpp"
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
 #include "rubble/gravity/octree_build.hpp"
@@ -298,19 +304,6 @@ Extent<D> extent_of(CachingDeviceAllocator& alloc, const Vec<D>* x, const Real* 
       init, ExtentUnion<D>());
 }
 
-// The state check after a step and the next step's time-step limit read
-// the same state: one reduction (CudaStepper::first_non_finite).
-struct StateCheck {
-  std::size_t first_bad;  // the first particle with a non-finite value (n: none)
-  Real dt;                // the smallest per-particle time-step limit
-};
-
-struct StateCheckMin {
-  __host__ __device__ StateCheck operator()(const StateCheck& a, const StateCheck& b) const {
-    return {a.first_bad < b.first_bad ? a.first_bad : b.first_bad, a.dt < b.dt ? a.dt : b.dt};
-  }
-};
-
 // An owned device allocation (move-only).
 class DeviceBuffer {
  public:
@@ -493,6 +486,7 @@ struct DeviceArray {
     n = count;
   }
   T* data() const { return buf.as<T>(); }
+  std::size_t size() const { return n; }
 };
 
 // Barnes-Hut on the device: the octree of gravity/octree_build.hpp built
@@ -718,145 +712,127 @@ class DeviceOctree {
 
 }  // namespace
 
+// A particle's neighbours within its own search radius, for summation
+// density (the `OwnNeighbours` of the step sequence): the candidates the
+// kernel gathered into its thread's list, or, when they did not fit, the
+// grid walked again on every Newton iteration (the same particles in the
+// same order, candidate_list.hpp).
 template <int D>
-struct CudaStepper<D>::Impl {
-  ParticleStore<D>& host;
-  Box<D> domain;
-  std::vector<MaterialParams> materials_host;
-  DeviceArray<MaterialParams> materials;
-  DeviceStore<D> store;
-  DeviceBuffer scratch;
-  CachingDeviceAllocator temp;  // temporary storage of the sorts and reductions
-  KernelType kernel;
-  Real hfact, courant, force_factor, h_tolerance, xsph_epsilon, shifting;
-  bool summation, solid = false, kernel_correction = false, artificial_stress = false, stress_diffusion = false;
-  bool porosity = false, plasticity = false, damage = false, body_force = false, wall_extrapolation = false;
-  bool viscosity_switch = false;  // a material has the viscosity switch (end-of-step bounds)
-  bool coulomb_walls = false;     // a wall has Coulomb friction (end-of-step friction anchors)
-  bool staggered = false;  // solids: simulation.stress_update = "staggered" (leapfrog.hpp)
-  Real stagger_dt = 0;     // inside a staggered evaluation: its dt
-  Vec<D> g = Vec<D>::zero();  // simulation.gravity
-  GravityConfig gravity;
-  DeviceArray<Mat<D>> art_R;
-  // staggered evaluations: pass 1's mass-weighted gradient, the energy
-  // rate's correction, and chi_a with artificial stress (RhsContext)
-  DeviceArray<Mat<D>> stagger_Lm;
-  DeviceArray<Real> stagger_du, as_chi;
-  DeviceArray<Real> search_radius, eps;
-  DeviceArray<int> flags;
-  // grid cell list
-  DeviceArray<std::uint64_t> keys;
-  DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
-  DeviceArray<Real> cell_rmax, cell_reach;  // per slot: largest R of its particles, of a ball touching it
-  GridNeighbors<D> grid{};
-  Extent<D> grid_extent{};  // the positions' extent when the grid was built (Barnes-Hut reuses it)
-  // integrator scratch
-  DeviceArray<Vec<D>> v_half, shift;  // shift: particle shifting
-  DeviceArray<Real> u_half, rho_half, alpha_half, alpha_start, damage_half, av_half;
-  DeviceArray<Mat<D>> S_half;
-  DeviceStore<D> y0, y1;
-  DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
-  ParticleStore<D> good_host;    // last_good(): their host copy
-  DeviceOctree octree;  // Barnes-Hut (3-D)
-  // kernel-gradient correction fallbacks, counted on the device (atomicAdd
-  // in the solid gradient kernel) and downloaded only when asked for
-  DeviceArray<unsigned long long> fallbacks;
-  std::int64_t evaluations = 0;
-  // The time-step limit of the current state, when known: the state check
-  // after a step computes it with the check (StateCheck), for the next
-  // step's dt_limit(). Forgotten by whatever changes the state (leapfrog,
-  // rk2, damp); a sort keeps it (a minimum over per-particle values does
-  // not depend on their order).
-  bool dt_known = false;
-  Real dt_cached = 0;
-  bool host_current = true;
-  std::int64_t bytes_downloaded = 0;  // device-to-host bytes of host()
+struct OwnCandidates {
+  const CandidateList<kCandidateListCapacity<D>>* list;  // nullptr: walk the grid
+  GridOwnRadius<D> own;
+  template <class F>
+  RUBBLE_HD void operator()(F&& f) const {
+    if (list) (*list)(f);
+    else own(f);
+  }
+};
 
-  Impl(const Scene& scene, ParticleStore<D>& ps, const Box<D>& dom)
-      : host(ps),
-        domain(dom),
-        materials_host(material_params_from_scene(scene)),
-        kernel(scene.simulation.kernel),
-        hfact(Real(scene.simulation.hfact > 0 ? scene.simulation.hfact : kernel_default_hfact(scene.simulation.kernel))),
-        courant(Real(scene.simulation.courant)),
-        force_factor(Real(scene.simulation.force_factor)),
-        h_tolerance(h_iteration_tolerance(scene.simulation.h_tolerance)),
-        xsph_epsilon(Real(scene.simulation.xsph)),
-        shifting(Real(scene.simulation.shifting)),
-        summation(scene.simulation.density == DensityForm::Summation),
-        gravity(scene.gravity) {
+// What the step sequence (rubble/drivers/step_sequence.hpp) asks of a
+// backend, on the device: loops as kernels, reductions through Thrust,
+// arrays in device memory, the radix sort along the curve, the uniform-grid
+// neighbour search and self-gravity. Every member function that launches a
+// lambda is public (nvcc's extended lambdas).
+template <int D>
+class CudaBackend {
+ public:
+  template <class T>
+  using Array = DeviceArray<T>;
+  using Store = DeviceStore<D>;
+  using Neighbours = GridNeighbors<D>;
+  using OwnNeighbours = OwnCandidates<D>;
+
+  CudaBackend(const RunPhysics& physics, const ParticleStore<D>& ps, const Box<D>& dom)
+      : domain(dom), kernel(physics.kernel), gravity(physics.gravity) {
     int devices = 0;
     const cudaError_t err = cudaGetDeviceCount(&devices);
     if (err != cudaSuccess || devices == 0)
       throw RunError(std::string("--backend cuda: no CUDA device available (") +
                      (err != cudaSuccess ? cudaGetErrorString(err) : "device count 0") + ")");
     if (ps.n > std::numeric_limits<std::uint32_t>::max()) throw RunError("more than 2^32 - 1 particles");
-    const RhsFeatures f = rhs_features<D>(scene, materials_host, ps);
-    solid = f.solid;
-    artificial_stress = f.artificial_stress;
-    kernel_correction = f.kernel_correction;
-    stress_diffusion = f.stress_diffusion;
-    porosity = f.porosity;
-    plasticity = f.plasticity;
-    damage = f.damage;
-    viscosity_switch = f.viscosity_switch;
-    coulomb_walls = !ps.wall_anchor.empty();
-    wall_extrapolation = f.wall_extrapolation;
-    body_force = f.body_force;
-    staggered = scene.simulation.stress_update == StressUpdate::Staggered && solid;
-    for (int k = 0; k < D; ++k) g[k] = Real(scene.simulation.gravity[k]);
-    materials.resize(materials_host.size());
-    RUBBLE_CUDA(cudaMemcpy(materials.data(), materials_host.data(), materials_host.size() * sizeof(MaterialParams),
-                           cudaMemcpyHostToDevice));
+    require_fields<D>(physics.on, ps);
+    materials_.resize(physics.materials.size());
+    RUBBLE_CUDA(cudaMemcpy(materials_.data(), physics.materials.data(),
+                           physics.materials.size() * sizeof(MaterialParams), cudaMemcpyHostToDevice));
     const std::size_t n = ps.n;
     store.allocate_like(ps);
     store.upload(ps);
-    if (solid && artificial_stress) art_R.resize(n);
-    search_radius.resize(n);
-    flags.resize(n);
-    if (gravity.mode != GravityMode::Off) eps.resize(n);
+    if (physics.on.gravity) eps.resize(n);
     keys.resize(n);
     order.resize(n);
     perm.resize(n);
-    fallbacks.resize(1);
-    RUBBLE_CUDA(cudaMemset(fallbacks.data(), 0, sizeof(unsigned long long)));
   }
 
-  std::size_t n() const { return store.size(); }
+  std::size_t size() const { return store.size(); }
+  StoreView<D> view() const { return store.view(); }
+  const MaterialParams* materials() const { return materials_.data(); }
 
-  RhsContext<D> context() const {
-    RhsContext<D> c;
-    c.s = store.view();
-    c.mat = materials.data();
-    c.domain = domain;
-    c.kernel = kernel;
-    c.hfact = hfact;
-    c.summation = summation;
-    c.kernel_correction = kernel_correction;
-    c.stress_diffusion = stress_diffusion;
-    c.art_R = art_R.n ? art_R.data() : nullptr;
-    c.xsph_epsilon = xsph_epsilon;
-    c.courant = courant;
-    c.force_factor = force_factor;
-    c.h_tolerance = h_tolerance;
-    c.body_force = g;
-    c.has_body_force = body_force;
-    c.stagger_dt = stagger_dt;
-    if (stagger_dt > Real(0)) {
-      c.stagger_Lm = stagger_Lm.data();
-      c.stagger_du = stagger_du.data();
-      c.as_chi = as_chi.n ? as_chi.data() : nullptr;
-    }
-    return c;
+  template <class F>
+  void for_each(const char* what, std::size_t n, F f) {
+    for_each_index(what, n, f);
   }
+  template <class F>
+  void for_each_neighbours(const char* what, F f) {
+    const GridNeighbors<D> g = grid;
+    for_each_index(what, size(), [=] __device__(std::size_t i) {
+      GridNeighbors<D> each = g;
+      each.a = std::uint32_t(i);
+      f(std::uint32_t(i), each);
+    });
+  }
+  // Summation density's Newton iterations on h (h <= R[i] throughout) need
+  // only the particles within R[i]: gathered once into a list in the
+  // thread's local memory and offered again on every iteration.
+  template <class F>
+  void for_each_in_own_radius(const char* what, const Real* /*R: the grid's*/, F f) {
+    const GridNeighbors<D> g = grid;
+    for_each_index(what, size(), [=] __device__(std::size_t i) {
+      GridNeighbors<D> each = g;
+      each.a = std::uint32_t(i);
+      const GridOwnRadius<D> own{each};
+      CandidateList<kCandidateListCapacity<D>> list;
+      const bool listed = list.gather(own);
+      f(std::uint32_t(i), OwnCandidates<D>{listed ? &list : nullptr, own});
+    });
+  }
+  // One host synchronisation (the result).
+  template <class T, class F, class Op>
+  T reduce(std::size_t n, F f, T init, Op op) {
+    return reduce_index<T>(temp, n, f, init, op);
+  }
+
+  IntegratorScratch<D, DeviceArray, DeviceStore<D>>& integrator_scratch() { return scratch; }
+  void save_state(DeviceStore<D>& copy) {
+    if (copy.size() != store.size()) copy.allocate_as(store);
+    copy.copy_from(store);
+  }
+  void restore_state(const DeviceStore<D>& copy) { store.copy_from(copy); }
+  static StoreView<D> view_of(DeviceStore<D>& copy) { return copy.view(); }
+
+  template <class T>
+  static void zero(DeviceArray<T>& a) {
+    RUBBLE_CUDA(cudaMemset(a.data(), 0, a.size() * sizeof(T)));
+  }
+  static std::int64_t read_count(const DeviceArray<unsigned long long>& a) {
+    unsigned long long count = 0;
+    copy_to_host(&count, a.data(), sizeof count);
+    return std::int64_t(count);
+  }
+
+  // The CPU's pair-once loops have no device form: the gather loops run.
+  bool hydro_pair_once(const RhsContext<D>&) { return false; }
+  bool solid_gradients_pair_once(const RhsContext<D>&, unsigned long long*) { return false; }
+  bool solid_forces_pair_once(const RhsContext<D>&) { return false; }
+  // The grid is built anew for every evaluation.
+  bool search_still_holds(const Real*) const { return false; }
 
   // Sort along the space-filling curve: the CPU's permutation, on the device.
   // One host synchronisation (the extent).
-  void sort_particles() {
-    const std::size_t count = n();
+  void sort(const Box<D>& dom) {
+    const std::size_t count = size();
     if (count == 0) return;
     const Extent<D> ext = extent_of<D>(temp, store.view().x, nullptr, count);
-    const Box<D> box = bounding_box_from_extent<D>(domain, ext.lo, ext.hi);
+    const Box<D> box = bounding_box_from_extent<D>(dom, ext.lo, ext.hi);
     const Vec<D>* x = store.view().x;
     std::uint64_t* k = keys.data();
     std::uint32_t* p = perm.data();
@@ -866,15 +842,14 @@ struct CudaStepper<D>::Impl {
     });
     // LSD radix sort: stable, so equal keys keep their index order as on the CPU
     sort_pairs(temp, k, p, count, "thrust::sort_by_key (Morton keys)");
-    store.permute(p, scratch);
-    host_current = false;
+    store.permute(p, scratch_buffer);
   }
 
   // The grid cell list for search radii R (device array of n), see
   // uniform_grid.hpp. One host synchronisation: the extent, the largest
   // radius and the sum of log R, one reduction.
-  void build_grid(const Real* R) {
-    const std::size_t count = n();
+  void search(const Real* R, bool /*keepable: the grid is not kept*/) {
+    const std::size_t count = size();
     const Extent<D> ext = extent_of<D>(temp, store.view().x, R, count);
     const Real r_max = ext.r_max;
     if (!(r_max > Real(0)) || !std::isfinite(r_max)) throw RunError("non-positive or non-finite search radius");
@@ -935,311 +910,84 @@ struct CudaStepper<D>::Impl {
     grid = g;
   }
 
-  void summation_density_and_h() {
-    const std::size_t count = n();
-    constexpr Real kSkin = Real(1.15);
-    Real* R = search_radius.data();
-    int* flag = flags.data();
-    const StoreView<D> s0 = store.view();
-    for_each_index("search radius", count, [=] __device__(std::size_t i) { R[i] = kSkin * s0.h[i]; });
-    for (int attempt = 0; attempt < 8; ++attempt) {
-      build_grid(R);
-      const RhsContext<D> c = context();
-      GridNeighbors<D> g = grid;
-      for_each_index("summation density", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        // R is read by every thread's neighbour walk: grown radii are
-        // written only after this kernel (below), not here.
-        // The Newton iterations on h (h <= R[i] throughout) need only the
-        // particles within R[i]: gathered once into a list in this
-        // thread's local memory and offered again on every iteration; a
-        // particle with more than the list holds walks the grid each time
-        // (the same particles in the same order: the same result).
-        const GridOwnRadius<D> own{each};
-        CandidateList<kCandidateListCapacity<D>> list;
-        const bool ok = list.gather(own) ? summation_density_particle<D>(c, std::uint32_t(i), R[i], list)
-                                         : summation_density_particle<D>(c, std::uint32_t(i), R[i], own);
-        flag[i] = ok ? 0 : 1;
-      });
-      // one host synchronisation per attempt (the host decides whether to
-      // rebuild); one attempt in a step where no h outgrew its radius
-      const unsigned long long outgrown = reduce_index<unsigned long long>(
-          temp, count, [=] __device__(std::size_t i) { return (unsigned long long)flag[i]; }, 0ull,
-          thrust::plus<unsigned long long>());
-      if (outgrown == 0) return;
-      for_each_index("grown search radius", count, [=] __device__(std::size_t i) {
-        if (flag[i]) R[i] = kSkin * c.s.h[i];
-      });
-    }
-    throw RunError("smoothing-length iteration did not settle after 8 neighbour rebuilds");
-  }
-
-  void evaluate() {
-    ++evaluations;
-    host_current = false;
-    const std::size_t count = n();
-    if (summation) {
-      summation_density_and_h();
-    } else {
-      const RhsContext<D> c0 = context();
-      for_each_index("h from density", count,
-                     [=] __device__(std::size_t i) { h_from_density_particle<D>(c0, std::uint32_t(i)); });
-      build_grid(c0.s.h);
-    }
-    const RhsContext<D> c = context();
-    const GridNeighbors<D> g = grid;
-    for_each_index("equation of state", count, [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
-    if (plasticity)
-      for_each_index("plastic return", count,
-                     [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), false); });
-    if (wall_extrapolation)
-      for_each_index("wall extrapolation", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        wall_extrapolation_particle<D>(c, std::uint32_t(i), each);
-      });
-    if (solid) {
-      unsigned long long* fb = fallbacks.data();
-      for_each_index("solid velocity gradient", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        if (!solid_gradient_particle<D>(c, std::uint32_t(i), each)) atomicAdd(fb, 1ull);  // rare
-      });
-      if (stagger_dt > Real(0)) {  // the staggered stress update between the passes (leapfrog.hpp)
-        const bool plastic = plasticity;
-        for_each_index("staggered stress update", count, [=] __device__(std::size_t i) {
-          staggered_update_particle<D>(c, std::uint32_t(i), plastic);
-        });
-      }
-      for_each_index("solid rates", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        solid_rates_particle<D>(c, std::uint32_t(i), each);
-      });
-      if (stagger_dt > Real(0))
-        for_each_index("staggered energy rate", count,
-                       [=] __device__(std::size_t i) { staggered_energy_particle<D>(c, std::uint32_t(i)); });
-    } else {
-      for_each_index("hydro rates", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        hydro_rates_particle<D>(c, std::uint32_t(i), each);
-      });
-    }
-    if (gravity.mode == GravityMode::Direct) self_gravity(c);
-    else if (gravity.mode == GravityMode::BarnesHut) barnes_hut(c);
-    if (body_force)
-      for_each_index("body force", count, [=] __device__(std::size_t i) { body_force_particle<D>(c, std::uint32_t(i)); });
-    if (c.s.boundary)
-      for_each_index("hold boundaries", count,
-                     [=] __device__(std::size_t i) { hold_boundary_particle<D>(c, std::uint32_t(i)); });
-
-    if (xsph_epsilon > Real(0))
-      for_each_index("xsph", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        xsph_particle<D>(c, std::uint32_t(i), each);
-      });
-  }
-
-  // Direct summation on the device (3-D): the loop body of direct.hpp.
-  void self_gravity(const RhsContext<D>& c) {
+  // Self-gravity (3-D): a_grav and phi by direct summation (the loop body of
+  // direct.hpp) or Barnes-Hut (DeviceOctree, over the grid's extent: the
+  // same positions, reduced earlier in this evaluation).
+  void self_gravity(const StoreView<D>& s) {
     if constexpr (D == 3) {
-      const std::size_t count = n();
+      const std::size_t count = size();
+      eps.resize(count);
       Real* e = eps.data();
       const bool fixed = gravity.softening == GravitySoftening::Fixed;
       const Real eps_fixed = Real(gravity.softening_length);
-      const StoreView<3> s = c.s;
       for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
+      if (gravity.mode == GravityMode::BarnesHut) {
+        octree.field(s.x, s.m, e, count, gravity, kernel, s.a_grav, s.phi, nullptr, &grid_extent);
+        return;
+      }
       const KernelType k = kernel;
       const Real G = Real(gravity.G);
       for_each_index("direct gravity", count, [=] __device__(std::size_t i) {
         const GravityField f = direct_field_of_particle(s.x, s.m, e, count, k, i);
         s.a_grav[i] = f.a * G;
         s.phi[i] = f.phi * G;
-        s.dvdt[i] += s.a_grav[i];
       });
     } else {
-      (void)c;
+      (void)s;
       throw RunError("self-gravity needs a 3-D scene");
     }
   }
 
-  // Barnes-Hut on the device (3-D): DeviceOctree above.
-  void barnes_hut(const RhsContext<D>& c) {
-    if constexpr (D == 3) {
-      const std::size_t count = n();
-      eps.resize(count);
-      Real* e = eps.data();
-      const bool fixed = gravity.softening == GravitySoftening::Fixed;
-      const Real eps_fixed = Real(gravity.softening_length);
-      const StoreView<3> s = c.s;
-      for_each_index("softening", count, [=] __device__(std::size_t i) { e[i] = fixed ? eps_fixed : s.h[i]; });
-      // the grid's extent: the same positions, reduced earlier in this evaluation
-      octree.field(s.x, s.m, e, count, gravity, kernel, s.a_grav, s.phi, s.dvdt, &grid_extent);
-    } else {
-      (void)c;
-      throw RunError("self-gravity needs a 3-D scene");
-    }
-  }
+  // ---- the device state (the stepper reads the store and the allocator)
+  DeviceStore<D> store;
+  CachingDeviceAllocator temp;  // temporary storage of the sorts and reductions
 
-  // After the integrator's last update of a step (hydro_cpu.hpp: end_step).
-  void end_step(const Real* alpha_start, Real dt) {
-    const RhsContext<D> c = context();
-    if (porosity)
-      for_each_index("end-of-step porosity", n(), [=] __device__(std::size_t i) {
-        porosity_end_step_particle<D>(c, std::uint32_t(i), alpha_start);
-      });
-    if (damage)
-      for_each_index("end-of-step damage cap", n(),
-                     [=] __device__(std::size_t i) { damage_end_step_particle<D>(c, std::uint32_t(i)); });
-    if (viscosity_switch)
-      for_each_index("end-of-step viscosity switch bounds", n(), [=] __device__(std::size_t i) {
-        viscosity_switch_end_step_particle<D>(c, std::uint32_t(i));
-      });
-    if (plasticity || porosity || damage)
-      for_each_index("end-of-step equation of state", n(),
-                     [=] __device__(std::size_t i) { eos_particle<D>(c, std::uint32_t(i)); });
-    if (plasticity)
-      for_each_index("end-of-step plastic return", n(),
-                     [=] __device__(std::size_t i) { plastic_return_particle<D>(c, std::uint32_t(i), true); });
-    if (shifting > Real(0)) {
-      // with the grid of the last evaluation (hydro_cpu.cpp: shift_particles)
-      const std::size_t count = n();
-      shift.resize(count);
-      Vec<D>* out = shift.data();
-      const GridNeighbors<D> g = grid;
-      const Real A = shifting;
-      for_each_index("particle shifting", count, [=] __device__(std::size_t i) {
-        GridNeighbors<D> each = g;
-        each.a = std::uint32_t(i);
-        shifting_particle<D>(c, std::uint32_t(i), A, dt, out, each);
-      });
-      const Box<D> dom = domain;
-      const StoreView<D> s = c.s;
-      for_each_index("apply shifts", count,
-                     [=] __device__(std::size_t i) { s.x[i] = dom.wrap(s.x[i] + out[i]); });
-    }
-    if (coulomb_walls)  // after the shift (hydro_cpu.cpp: end_step)
-      for_each_index("end-of-step wall friction anchors", n(),
-                     [=] __device__(std::size_t i) { wall_anchor_end_step_particle<D>(c, std::uint32_t(i)); });
-  }
+ private:
+  Box<D> domain;
+  KernelType kernel;
+  GravityConfig gravity;
+  DeviceArray<MaterialParams> materials_;
+  DeviceBuffer scratch_buffer;  // the sort's gathers
+  DeviceArray<Real> eps;        // gravity softening
+  // grid cell list
+  DeviceArray<std::uint64_t> keys;
+  DeviceArray<std::uint32_t> order, cell_start, cell_end, perm;
+  DeviceArray<Real> cell_rmax, cell_reach;  // per slot: largest R of its particles, of a ball touching it
+  GridNeighbors<D> grid{};
+  Extent<D> grid_extent{};  // the positions' extent when the grid was built (Barnes-Hut reuses it)
+  IntegratorScratch<D, DeviceArray, DeviceStore<D>> scratch;
+  DeviceOctree octree;  // Barnes-Hut (3-D)
+};
 
-  // The first non-finite particle and the time-step limit: one reduction.
-  StateCheck check_state() {
-    const RhsContext<D> c = context();
-    const std::size_t count = n();
-    const StateCheck r = reduce_index<StateCheck>(
-        temp, count,
-        [=] __device__(std::size_t i) {
-          return StateCheck{finite_particle<D>(c.s, std::uint32_t(i)) ? count : i,
-                            dt_limit_particle<D>(c, std::uint32_t(i))};
-        },
-        StateCheck{count, Real(1e30)}, StateCheckMin());
-    dt_cached = r.dt;
-    dt_known = true;
-    return r;
-  }
+// The time loop's interface on the device: the scene's physics, the
+// backend and the step sequence (the same one the CPU runs), plus the host
+// copies the loop asks for.
+template <int D>
+struct CudaStepper<D>::Impl {
+  ParticleStore<D>& host;
+  RunPhysics physics;
+  CudaBackend<D> backend;
+  StepSequence<D, CudaBackend<D>> steps;
+  Vec<D> g = Vec<D>::zero();     // simulation.gravity (its potential energy)
+  DeviceStore<D> good;           // keep_good(): the snapshot fields before the step
+  ParticleStore<D> good_host;    // last_good(): their host copy
+  bool host_current = true;
+  std::int64_t bytes_downloaded = 0;  // device-to-host bytes of host()
 
-  double dt_limit() {
-    if (!dt_known) check_state();
-    return double(dt_cached);
+  Impl(const Scene& scene, ParticleStore<D>& ps, const Box<D>& dom)
+      : host(ps), physics(run_physics(scene)), backend(physics, ps, dom), steps(physics, backend, dom) {
+    for (int k = 0; k < D; ++k) g[k] = physics.body_force[k];
   }
-
-  void leapfrog(Real dt) {
-    dt_known = false;
-    const std::size_t count = n();
-    const StoreView<D> s = store.view();
-    v_half.resize(count);
-    u_half.resize(count);
-    if (s.drhodt && !staggered) rho_half.resize(count);
-    if (s.dSdt && !staggered) S_half.resize(count);
-    if (s.dalphadt) {
-      alpha_half.resize(count);
-      alpha_start.resize(count);
-      RUBBLE_CUDA(cudaMemcpy(alpha_start.data(), s.alpha, count * sizeof(Real), cudaMemcpyDeviceToDevice));
-    }
-    if (s.ddamage_root_dt) damage_half.resize(count);
-    if (s.dav_alpha_dt) av_half.resize(count);
-    const LeapfrogHalf<D> half{v_half.data(),
-                               u_half.data(),
-                               s.drhodt && !staggered ? rho_half.data() : nullptr,
-                               s.dSdt && !staggered ? S_half.data() : nullptr,
-                               s.dalphadt ? alpha_half.data() : nullptr,
-                               s.ddamage_root_dt ? damage_half.data() : nullptr,
-                               s.dav_alpha_dt ? av_half.data() : nullptr,
-                               staggered};
-    const Box<D> dom = domain;
-    for_each_index("leapfrog kick-drift", count,
-                   [=] __device__(std::size_t i) { leapfrog_kick_drift<D>(s, half, dom, i, dt); });
-    if (staggered) {
-      if (stagger_Lm.n != count) stagger_Lm.resize(count);
-      if (stagger_du.n != count) stagger_du.resize(count);
-      if (art_R.n && as_chi.n != count) as_chi.resize(count);
-      stagger_dt = dt;
-      try {
-        evaluate();
-      } catch (...) {
-        stagger_dt = 0;
-        throw;
-      }
-      stagger_dt = 0;
-    } else {
-      evaluate();
-    }
-    for_each_index("leapfrog kick", count, [=] __device__(std::size_t i) { leapfrog_kick<D>(s, half, i, dt); });
-    end_step(s.dalphadt ? alpha_start.data() : nullptr, dt);
-  }
-
-  Rk2Result rk2(Real dt, Real tol, Real dt_min) {
-    dt_known = false;
-    const std::size_t count = n();
-    if (y0.size() != count) {
-      y0.allocate_as(store);
-      y1.allocate_as(store);
-    }
-    y0.copy_from(store);  // state and k1 (its rates)
-    const StoreView<D> v0 = y0.view(), v1 = y1.view(), y = store.view();
-    const Box<D> dom = domain;
-    int rejections = 0;
-    for (;;) {
-      for_each_index("rk2 stage 2", count,
-                     [=] __device__(std::size_t i) { rk2_combine<D>(y, v0, v0, nullptr, dt, dom, i); });
-      evaluate();
-      y1.copy_from(store);  // k2 = rates of y1
-      const Real q = Real(0.25) * dt;
-      for_each_index("rk2 stage 3", count, [=] __device__(std::size_t i) {
-        rk2_combine<D>(y, v0, v0, &v1, q, dom, i);
-      });
-      evaluate();  // k3 = rates in the store
-      const Real c23 = Real(2) / Real(3) * dt;
-      const Real err = reduce_index<Real>(
-          temp, count, [=] __device__(std::size_t i) { return rk2_error_particle<D>(v0, v1, y, c23, i); }, Real(0),
-          thrust::maximum<Real>());
-      const Real factor = rk2_step_factor(err, tol);
-      if (err <= tol || dt <= dt_min) {
-        const Real h2 = Real(0.5) * dt;
-        for_each_index("rk2 final", count, [=] __device__(std::size_t i) {
-          rk2_combine<D>(y, v0, v0, &v1, h2, dom, i);
-        });
-        end_step(v0.alpha, dt);
-        evaluate();  // k1 of the next step
-        return {dt, dt * factor, rejections};
-      }
-      store.copy_from(y0);  // rejected: back to y_n with a smaller step
-      dt = std::max(dt * factor, dt_min);
-      ++rejections;
-    }
-  }
+  std::size_t n() const { return backend.size(); }
 };
 
 template <int D>
 CudaStepper<D>::CudaStepper(const Scene& scene, ParticleStore<D>& ps, const Box<D>& domain, bool resumed)
     : impl_(std::make_unique<Impl>(scene, ps, domain)) {
   if (resumed) return;
-  impl_->sort_particles();
-  impl_->evaluate();
+  impl_->steps.sort_particles();
+  impl_->steps.evaluate();
+  impl_->host_current = false;
 }
 
 template <int D>
@@ -1247,54 +995,54 @@ CudaStepper<D>::~CudaStepper() = default;
 
 template <int D>
 void CudaStepper<D>::sort_particles() {
-  impl_->sort_particles();
+  impl_->steps.sort_particles();
+  impl_->host_current = false;
 }
 
 template <int D>
 double CudaStepper<D>::dt_limit() {
-  return impl_->dt_limit();
+  return double(impl_->steps.dt_limit());
 }
 
 template <int D>
 void CudaStepper<D>::leapfrog(double dt) {
-  impl_->leapfrog(Real(dt));
+  impl_->host_current = false;
+  impl_->steps.leapfrog(Real(dt));
 }
 
 template <int D>
 Rk2Result CudaStepper<D>::rk2(double dt, double tol, double dt_min) {
-  return impl_->rk2(Real(dt), Real(tol), Real(dt_min));
+  impl_->host_current = false;
+  return impl_->steps.rk2(Real(dt), Real(tol), Real(dt_min));
 }
 
 template <int D>
 void CudaStepper<D>::damp(double f) {
-  const StoreView<D> s = impl_->store.view();
-  const Real fr = Real(f);
-  for_each_index("damping", impl_->n(), [=] __device__(std::size_t i) { s.v[i] *= fr; });
   impl_->host_current = false;
-  impl_->dt_known = false;
+  impl_->steps.damp(Real(f));
 }
 
-// With the next step's time-step limit (Impl::check_state): the loop asks
-// for both of the same state.
+// With the next step's time-step limit (StepSequence::check_state): the
+// loop asks for both of the same state.
 template <int D>
 std::size_t CudaStepper<D>::first_non_finite() {
-  return impl_->check_state().first_bad;
+  return impl_->steps.check_state().first_bad;
 }
 
 template <int D>
 ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt) {
-  const StoreView<D> s = impl_->store.view();
+  const StoreView<D> s = impl_->backend.view();
   const Vec<D> g = impl_->g;
   const ConservedSums sum = reduce_index<ConservedSums>(
-      impl_->temp, impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); }, ConservedSums{},
-      thrust::plus<ConservedSums>());
+      impl_->backend.temp, impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); },
+      ConservedSums{}, thrust::plus<ConservedSums>());
   return conserved_record(sum, t, step, dt);
 }
 
 template <int D>
 const ParticleStore<D>& CudaStepper<D>::host() {
   if (!impl_->host_current) {
-    impl_->bytes_downloaded += std::int64_t(impl_->store.download(impl_->host));
+    impl_->bytes_downloaded += std::int64_t(impl_->backend.store.download(impl_->host));
     impl_->host_current = true;
   }
   return impl_->host;
@@ -1302,7 +1050,7 @@ const ParticleStore<D>& CudaStepper<D>::host() {
 
 template <int D>
 void CudaStepper<D>::keep_good() {
-  impl_->good.copy_snapshot_fields_from(impl_->store);
+  impl_->good.copy_snapshot_fields_from(impl_->backend.store);
 }
 
 template <int D>
@@ -1324,19 +1072,17 @@ std::int64_t CudaStepper<D>::bytes_downloaded() const {
 
 template <int D>
 std::int64_t CudaStepper<D>::correction_fallbacks() const {
-  unsigned long long count = 0;
-  copy_to_host(&count, impl_->fallbacks.data(), sizeof count);
-  return std::int64_t(count);
+  return impl_->steps.correction_fallbacks();
 }
 
 template <int D>
 std::int64_t CudaStepper<D>::evaluations() const {
-  return impl_->evaluations;
+  return impl_->steps.evaluations();
 }
 
 template <int D>
 bool CudaStepper<D>::solid() const {
-  return impl_->solid;
+  return impl_->physics.on.solid;
 }
 
 CudaBackendCounts cuda_backend_counts() {

@@ -23,7 +23,6 @@
 #include <string>
 #include <vector>
 
-#include "../../src/cuda/cuda_stepper.hpp"  // cuda_backend_counts()
 #include "parity_scenes.hpp"
 #include "rubble/run.hpp"
 

@@ -19,10 +19,12 @@
 
 namespace rubble {
 
-// Room for the neighbours within 1.15 H (the summation-density search
-// radius) at the defaults of kernels.hpp with room to spare: in 3-D the
-// Wendland C6 kernel has about 180 within H, so 274 within 1.15 H; in 2-D
-// 51; in 1-D 8.
+// Room for the neighbours within kSearchSkin H = 1.05 H (the
+// summation-density search radius, search_radius.hpp) at the defaults of
+// kernels.hpp with room to spare: in 3-D the Wendland C6 kernel has about
+// 180 within H, so ~210 within 1.05 H; in 2-D ~45; in 1-D 8. A particle
+// that searched again at kRegrowSkin H = 1.3 H (~395 in 3-D for Wendland C6)
+// may not fit: it walks the grid instead (same result).
 template <int D>
 inline constexpr std::uint32_t kCandidateListCapacity = D == 1 ? 32 : D == 2 ? 128 : 384;
 
