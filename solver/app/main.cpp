@@ -34,7 +34,7 @@
 #include "rubble/run.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/drivers/run_physics.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 #ifndef RUBBLE_VERSION
 #define RUBBLE_VERSION "unknown"

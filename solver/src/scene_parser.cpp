@@ -26,7 +26,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 #include "rubble/drivers/run_physics.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 namespace rubble {
 namespace {

@@ -30,7 +30,7 @@
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/flaws.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 #include "rubble/scene/scene.hpp"
 
 using namespace rubble;

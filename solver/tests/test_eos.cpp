@@ -24,7 +24,7 @@
 #include "rubble/reference/eos_finite_difference.hpp"
 #include "rubble/run.hpp"
 #include "rubble/drivers/run_physics.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 using namespace rubble;
 

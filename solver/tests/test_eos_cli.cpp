@@ -17,7 +17,7 @@
 
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/drivers/run_physics.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 namespace fs = std::filesystem;
 

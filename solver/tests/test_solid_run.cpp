@@ -18,7 +18,7 @@
 #include "rubble/reference/elastic_energy.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/drivers/run_physics.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 #include "rubble/run.hpp"
 
 using namespace rubble;

@@ -8,20 +8,11 @@
 #include <vector>
 
 #include "rubble/scene/scene.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 namespace rubble {
 
-// Parse and validate a scene. `overrides` are "dotted.key=value" strings
-// (the --set option), applied to the TOML tree before validation; the value
-// is parsed as TOML (so 0.5, true, "text", [1, 2] all work).
-// Throws InputError naming the file, the key and the problem.
-Scene load_scene_file(const std::string& path, const std::vector<std::string>& overrides = {});
-// `libraries`: when given, `library = SPEC` is resolved from this list
-// (by spec) instead of the disk: how a run resumes from a snapshot with the
-// library values it started with (an unlisted spec is an error).
-Scene parse_scene(const std::string& text, const std::string& file_label,
-                  const std::vector<std::string>& overrides = {},
-                  const std::vector<LibraryText>* libraries = nullptr);
+// Reading scenes: load_scene_file, parse_scene (rubble/scene/scene_parser.hpp).
 
 // Where the particles live and the right-hand side is evaluated. `cpu`
 // (OpenMP) is always built; `cuda` only with -DRUBBLE_CUDA=ON.
