@@ -50,21 +50,13 @@ double smoothing_factor(const SimulationConfig& sim) {
 EosParams eos_params_from_material(const MaterialConfig& m) {
   EosParams e;
   e.kind = m.eos;
+  // the scene holds the EOS's own parameters; only the kind's are used
   switch (m.eos) {  // no default: a new EOS kind is a compiler warning here
-    case EosKind::Murnaghan: e.murnaghan = {Real(m.murnaghan.rho0), Real(m.murnaghan.K0), Real(m.murnaghan.n)}; break;
-    case EosKind::Tillotson: {
-      const TillotsonConfig& t = m.tillotson;
-      e.tillotson = {Real(t.rho0), Real(t.A),  Real(t.B), Real(t.E0),    Real(t.E_iv),
-                     Real(t.E_cv), Real(t.a),  Real(t.b), Real(t.alpha), Real(t.beta)};
-      break;
-    }
+    case EosKind::Murnaghan: e.murnaghan = m.murnaghan; break;
+    case EosKind::Tillotson: e.tillotson = m.tillotson; break;
     case EosKind::IdealGas: e.ideal_gas.gamma = Real(m.gamma); break;
   }
-  e.limits.rho_limit = Real(m.eos_options.rho_limit);
-  e.limits.p_min_enabled = m.eos_options.p_min_enabled;
-  e.limits.p_min = Real(m.eos_options.p_min);
-  e.limits.cs_min = Real(m.eos_options.cs_min);
-  e.limits.cs_floor = m.eos_options.cs_floor;
+  e.limits = m.eos_options;
   return e;
 }
 

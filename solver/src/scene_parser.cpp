@@ -372,9 +372,9 @@ class SceneReader {
   void read_simulation(const toml::table& root, SimulationConfig& s);
   MaterialConfig read_material(const std::string& name, const toml::table& t);
   MaterialConfig read_material_table(const std::string& p, const toml::table& t, bool library);
-  void read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c);
-  void read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c);
-  void read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosOptionsConfig& o);
+  void read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanParams& c);
+  void read_tillotson(const toml::table& mt, const std::string& p, TillotsonParams& c);
+  void read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosLimits& o);
   void read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   void read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m);
   void read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m);
@@ -570,7 +570,7 @@ std::string SceneReader::resolve_library(const std::string& spec, const std::str
   return path.string();
 }
 
-void SceneReader::read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanConfig& c) {
+void SceneReader::read_murnaghan(const toml::table& mt, const std::string& p, MurnaghanParams& c) {
   const std::string tp = sub(p, "murnaghan");
   const toml::table* t = table(mt, "murnaghan", p);
   if (!t) fail(tp, "missing required table (the Murnaghan parameters: rho0 [kg/m^3], K0 [Pa], n)");
@@ -583,7 +583,7 @@ void SceneReader::read_murnaghan(const toml::table& mt, const std::string& p, Mu
   require(c.n > 0, *t, "n", tp, c.n, "> 0");
 }
 
-void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, TillotsonConfig& c) {
+void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, TillotsonParams& c) {
   const std::string tp = sub(p, "tillotson");
   const toml::table* t = table(mt, "tillotson", p);
   if (!t) fail(tp, "missing required table (the Tillotson parameters: rho0, A, B, E0, E_iv, E_cv, a, b, alpha, beta)");
@@ -620,7 +620,7 @@ void SceneReader::read_tillotson(const toml::table& mt, const std::string& p, Ti
 
 // The add-on options: rho_limit, p_min, cs_min (each off unless given) and
 // the Tillotson cs_floor (on unless set to false).
-void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosOptionsConfig& o) {
+void SceneReader::read_eos_options(const toml::table& t, const std::string& p, EosKind eos, EosLimits& o) {
   if (eos == EosKind::IdealGas && t.contains("rho_limit"))
     fail(sub(p, "rho_limit"), "the ideal gas has no tension cut-off (it needs a reference density: murnaghan or tillotson)",
          t.get("rho_limit"));
@@ -982,7 +982,7 @@ void SceneReader::check_pressure_reachable(const std::string& p, const toml::tab
   if (eos_internal_energy_from_pressure(e, Real(a0 * rho), Real(a0 * pressure)) >= 0) return;
   const std::string key = sub(p, "pressure");
   if (m.eos == EosKind::Murnaghan) {
-    const MurnaghanConfig& c = m.murnaghan;
+    const MurnaghanParams& c = m.murnaghan;
     const double base = 1 + c.n * pressure / c.K0;
     fail(key,
          "material '" + m.name + "' uses the Murnaghan EOS, which is isothermal: the pressure follows from the density (" +

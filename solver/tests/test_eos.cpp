@@ -687,7 +687,7 @@ TEST_F(eos_library, TillotsonFilesMatchThePhysicsTable) {
   for (const auto& [name, t] : kTable) {
     const MaterialConfig m = load_material(name);
     ASSERT_EQ(m.eos, EosKind::Tillotson) << name;
-    const TillotsonConfig& c = m.tillotson;
+    const TillotsonParams& c = m.tillotson;
     const double got[10] = {c.rho0, c.A, c.B, c.E0, c.E_iv, c.E_cv, c.a, c.b, c.alpha, c.beta};
     const double want[10] = {t.rho0, t.A, t.B, t.E0, t.E_iv, t.E_cv, t.a, t.b, t.alpha, t.beta};
     for (int k = 0; k < 10; ++k) EXPECT_EQ(got[k], want[k]) << name << " parameter " << k;
@@ -715,7 +715,7 @@ TEST_F(eos_library, NylonIsSpheralsTillotsonEntryInSI) {
   // (reference_data/materials/nylon.toml gives the provenance)
   const MaterialConfig m = load_material("nylon");
   ASSERT_EQ(m.eos, EosKind::Tillotson);
-  const TillotsonConfig& c = m.tillotson;
+  const TillotsonParams& c = m.tillotson;
   EXPECT_DOUBLE_EQ(c.rho0, 1.185 * 1000);
   EXPECT_DOUBLE_EQ(c.A, 1.01e11 * 0.1);
   EXPECT_DOUBLE_EQ(c.B, 3.38e11 * 0.1);
@@ -933,7 +933,7 @@ TEST_F(eos_scene, ProblemsInALibraryFileNameThatFile) {
 
 TEST_F(eos_scene, OptionsAreReadAndValidated) {
   const Scene s = parse_scene(scene_with("library = \"basalt\"\nrho_limit = 0.9\np_min = -1e6\ncs_min = 100.0"), "t.toml");
-  const EosOptionsConfig& o = s.materials[0].eos_options;
+  const EosLimits& o = s.materials[0].eos_options;
   EXPECT_EQ(o.rho_limit, 0.9);
   EXPECT_TRUE(o.p_min_enabled);
   EXPECT_EQ(o.p_min, -1e6);

@@ -75,35 +75,6 @@ struct ArtificialConductivity {
   double alpha_u = 1.0;  // Price (2008)
 };
 
-// Murnaghan EOS (murnaghan = { rho0, K0, n }); docs/scene.md.
-struct MurnaghanConfig {
-  double rho0 = 0;  // [kg/m^3] reference density (> 0)
-  double K0 = 0;    // [Pa] zero-pressure bulk modulus (> 0)
-  double n = 0;     // pressure derivative of the bulk modulus (> 0)
-};
-
-// Tillotson EOS (tillotson = { rho0, A, B, E0, E_iv, E_cv, a, b, alpha, beta }).
-struct TillotsonConfig {
-  double rho0 = 0;   // [kg/m^3] (> 0)
-  double A = 0;      // [Pa] bulk modulus (> 0)
-  double B = 0;      // [Pa] (>= 0)
-  double E0 = 0;     // [J/kg] (> 0)
-  double E_iv = 0;   // [J/kg] incipient vaporisation (> 0)
-  double E_cv = 0;   // [J/kg] complete vaporisation (> E_iv)
-  double a = 0;      // (>= 0)
-  double b = 0;      // (>= 0)
-  double alpha = 0;  // (>= 0)
-  double beta = 0;   // (>= 0)
-};
-
-// Add-on options of an equation of state, each off unless set.
-struct EosOptionsConfig {
-  double rho_limit = 0;        // tension cut-off below rho/rho0 = rho_limit; 0 = off
-  bool p_min_enabled = false;  // minimum pressure on?
-  double p_min = 0;            // [Pa]
-  double cs_min = 0;           // [m/s] minimum sound speed; 0 = off
-  bool cs_floor = true;        // Tillotson only: c^2 >= A/rho0 (key cs_floor)
-};
 
 // Artificial stress against the tensile instability (Monaghan 2000; Gray,
 // Monaghan & Swift 2001); solids only, off by default.
@@ -172,9 +143,13 @@ struct MaterialConfig {
   std::string units;         // library files: "SI" or "dimensionless"
   EosKind eos = EosKind::IdealGas;
   double gamma = 0;     // ideal gas adiabatic index (> 1)
-  MurnaghanConfig murnaghan;
-  TillotsonConfig tillotson;
-  EosOptionsConfig eos_options;
+  // The EOS's own parameters (physics/eos/), as the scene reader validated
+  // them: murnaghan = { rho0, K0, n }, tillotson = { rho0, A, B, E0, E_iv,
+  // E_cv, a, b, alpha, beta }, and the add-on options (rho_limit, p_min,
+  // cs_min, cs_floor), each off unless set; docs/scene.md.
+  MurnaghanParams murnaghan;
+  TillotsonParams tillotson;
+  EosLimits eos_options;
   ArtificialViscosity viscosity;
   ArtificialConductivity conductivity;
   double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid

@@ -14,9 +14,9 @@
 namespace rubble {
 
 struct MurnaghanParams {
-  Real rho0;  // reference density ρ0 > 0
-  Real K0;    // zero-pressure bulk modulus K0 > 0
-  Real n;     // pressure derivative of the bulk modulus, n > 0
+  Real rho0 = 0;  // reference density ρ0 > 0 [kg/m³]
+  Real K0 = 0;    // zero-pressure bulk modulus K0 > 0 [Pa]
+  Real n = 0;     // pressure derivative of the bulk modulus, n > 0
 };
 
 // (η^n − 1)/n written as expm1(n ln η)/n: exact to round-off near η = 1,

@@ -36,16 +36,16 @@
 namespace rubble {
 
 struct TillotsonParams {
-  Real rho0;   // reference density ρ0 [kg/m³]
-  Real A;      // bulk modulus [Pa]
-  Real B;      // nonlinear compression coefficient [Pa]
-  Real E0;     // E0 [J/kg] (the energy scale in ω)
-  Real E_iv;   // specific energy of incipient vaporisation [J/kg]
-  Real E_cv;   // specific energy of complete vaporisation [J/kg]
-  Real a;      // dimensionless
-  Real b;      // dimensionless
-  Real alpha;  // α: decay of the expanded terms, e^{−α z²}
-  Real beta;   // β: decay of the cold term, e^{−β z}
+  Real rho0 = 0;   // reference density ρ0 [kg/m³] (> 0)
+  Real A = 0;      // bulk modulus [Pa] (> 0)
+  Real B = 0;      // nonlinear compression coefficient [Pa] (>= 0)
+  Real E0 = 0;     // E0 [J/kg] (the energy scale in ω; > 0)
+  Real E_iv = 0;   // specific energy of incipient vaporisation [J/kg] (> 0)
+  Real E_cv = 0;   // specific energy of complete vaporisation [J/kg] (> E_iv)
+  Real a = 0;      // dimensionless (>= 0)
+  Real b = 0;      // dimensionless (>= 0)
+  Real alpha = 0;  // α: decay of the expanded terms, e^{−α z²} (>= 0)
+  Real beta = 0;   // β: decay of the cold term, e^{−β z} (>= 0)
 };
 
 enum class TillotsonRegime : int { Compressed = 0, ExpandedCold = 1, PartialVaporisation = 2, ExpandedHot = 3 };
