@@ -201,7 +201,7 @@ void check_scene(const rubble::Scene& s) {
       throw std::runtime_error("bodies 1 and 2 must be the floor and the back wall: fixed boundary boxes");
   if (!(s.simulation.gravity[1] < 0)) throw std::runtime_error("the scene needs simulation.gravity = [0, -g]");
   const auto& m = s.materials[std::size_t(c.material_id)];
-  if (m.plasticity.model != rubble::PlasticityType::DruckerPrager)
+  if (m.plasticity.model != rubble::PlasticityModel::DruckerPrager)
     throw std::runtime_error("the column material must be Drucker-Prager");
 }
 

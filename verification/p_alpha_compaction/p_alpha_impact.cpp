@@ -40,7 +40,7 @@
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
 #include "rubble/run.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 using rubble::verification::Check;
 using rubble::verification::Json;

@@ -118,7 +118,8 @@
 #include "rubble/physics/porosity.hpp"
 #include "rubble/reference/porous_piston.hpp"
 #include "rubble/run.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/drivers/run_physics.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 using rubble::verification::Check;
 using rubble::verification::Json;
@@ -563,7 +564,7 @@ int run_piston(const Args& args) {
     const EosParams matrix = eos_params_from_material(mc);
     PorosityParams por{};
     por.enabled = true;
-    por.curve = mc.porosity.crush_curve == CrushCurveType::Steep ? CrushCurve::Steep : CrushCurve::Quadratic;
+    por.curve = mc.porosity.crush_curve == CrushCurve::Steep ? CrushCurve::Steep : CrushCurve::Quadratic;
     por.alpha_e = Real(mc.porosity.alpha0);
     por.p_e = Real(mc.porosity.p_e);
     por.p_s = Real(mc.porosity.p_s);

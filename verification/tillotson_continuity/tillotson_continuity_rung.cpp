@@ -47,7 +47,8 @@
 #include "rubble/core/error.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/reference/eos_finite_difference.hpp"
-#include "rubble/scene/materials.hpp"
+#include "rubble/drivers/run_physics.hpp"
+#include "rubble/scene/scene_parser.hpp"
 
 using rubble::verification::Check;
 using rubble::verification::Json;
@@ -518,10 +519,10 @@ int main(int argc, char** argv) {
     for (const auto& name : names) {
       const MaterialConfig m = load_material(name);
       Outcome o;
-      if (m.eos == EosType::Tillotson) {
+      if (m.eos == EosKind::Tillotson) {
         o = tillotson_case(m, args);
         ++tillotson;
-      } else if (m.eos == EosType::Murnaghan) {
+      } else if (m.eos == EosKind::Murnaghan) {
         const EosParams e = eos_params_from_material(m);
         std::vector<double> rhos;
         for (double eta : eta_grid()) rhos.push_back(eta * m.murnaghan.rho0);
