@@ -186,8 +186,8 @@ TEST(Run, SmoothingLengthIterationStopsAtItsTolerance) {
 }
 
 // The CPU force loops compute each pair once within a thread's range of
-// particles and from each side across ranges (HydroCpu::rates, both passes
-// of HydroCpu::solid_rates), so the thread count changes only the order of
+// particles and from each side across ranges (CpuBackend::hydro_pair_once, both
+// solid passes), so the thread count changes only the order of
 // the sums: a run on 1 and on 3 threads (uneven ranges) agrees to rounding
 // in every field (relative to the field's scale); a pair counted twice or
 // missed changes the fields at the 1e-3 level or more.
@@ -252,7 +252,7 @@ TEST(Run, ThreadCountChangesOnlyTheRoundingOfASolid) {
 #endif
 
 // Continuity density keeps the neighbour lists across evaluations while
-// every interacting pair is still listed (HydroCpu::lists_still_hold).
+// every interacting pair is still listed (CpuBackend::search_still_holds).
 // Entries beyond the supports add nothing and the lists keep their order,
 // so the run must be the same bit for bit as one that searches at every
 // evaluation: a solid (the plate, leapfrog and rk2_adaptive) that keeps

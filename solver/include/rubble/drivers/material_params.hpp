@@ -1,8 +1,6 @@
 #pragma once
 // Per-material coefficients in a device-friendly form (plain data, copied to
 // the GPU as an array indexed by material_id).
-#include <vector>
-
 #include "rubble/core/real.hpp"
 #include "rubble/physics/artificial_viscosity.hpp"
 #include "rubble/physics/damage.hpp"
@@ -12,8 +10,6 @@
 #include "rubble/physics/viscosity_switch.hpp"
 
 namespace rubble {
-
-struct Scene;
 
 struct MaterialParams {
   EosParams eos;
@@ -33,16 +29,7 @@ struct MaterialParams {
   DamageParams damage;          // enabled = false: no tensile damage
 };
 
-// The device-ready porosity and plasticity parameters of a validated
-// material (hydro_cpu.cpp).
-struct PorosityConfig;
-struct PlasticityConfig;
-struct DamageConfig;
-PorosityParams porosity_params_from_config(const PorosityConfig& c);
-PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
-DamageParams damage_params_from_config(const DamageConfig& c);
-
-// One entry per scene material, in material_id order (hydro_cpu.cpp).
-std::vector<MaterialParams> material_params_from_scene(const Scene& scene);
+// Built from a scene's materials by material_params_from_scene
+// (rubble/drivers/run_physics.hpp).
 
 }  // namespace rubble

@@ -2,7 +2,7 @@
 // Self-gravity of the particles as a scene asks for it ([gravity]): off,
 // direct summation, or the Barnes-Hut octree; softening from each particle's
 // smoothing length or a fixed length; the scene's G. The CPU driver calls
-// compute() once per evaluation of the right-hand side (hydro_cpu.cpp).
+// compute() once per evaluation of the right-hand side (cpu_stepper.cpp).
 #include <cstddef>
 #include <vector>
 
