@@ -21,7 +21,7 @@
 
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
-#include "rubble/drivers/material_params.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
 #include "rubble/run.hpp"
