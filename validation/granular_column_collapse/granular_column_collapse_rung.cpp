@@ -81,9 +81,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "../../verification/common/args.hpp"
 #include "../../verification/common/conserved_csv.hpp"
-#include "../../verification/common/record.hpp"
+#include "../../verification/common/rung.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 
@@ -146,40 +145,28 @@ const std::vector<double> kFrontThickness = {0.02, 0.05, 0.1, 0.2};
 const std::vector<double> kEpsSensitivity = {0.02, 0.05, 0.2};  // recorded beside it
 
 // ---- arguments -------------------------------------------------------------
-struct Args {
-  std::string part = "column", scene, records = "reports/records", out = "granular_column_collapse_out",
-              label = "bui2008";
-  std::vector<double> resolutions, aspects;
+struct Args : rubble::verification::RungArgs {
+  std::string part = "column";
+  std::vector<double> aspects;
   double resolution = 25;
-  std::vector<std::string> sets;
-  bool report_only = false, keep = false;
-  std::vector<std::string> known_failures;  // --known-failure TEXT (record.hpp: rung_exit_status)
-};
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--part", a.part) || r.value("--scene", a.scene) || r.value("--records", a.records) ||
-          r.value("--out", a.out) || r.value("--label", a.label) || r.append("--set", a.sets) ||
-          r.flag("--report-only", a.report_only) || r.append("--known-failure", a.known_failures) ||
-          r.flag("--keep", a.keep) || r.list("--resolutions", a.resolutions) ||
-          r.value("--resolution", a.resolution) || r.list("--aspects", a.aspects)))
-      r.unknown();
-  if (a.scene.empty()) throw std::runtime_error("need --scene");
-  if (a.part == "column") {
-    if (a.resolutions.empty()) throw std::runtime_error("--part column needs --resolutions");
-    for (std::size_t i = 0; i < a.resolutions.size(); ++i)
-      if (a.resolutions[i] < 4 || a.resolutions[i] != std::round(a.resolutions[i]) ||
-          (i > 0 && a.resolutions[i] <= a.resolutions[i - 1]))
-        throw std::runtime_error("--resolutions: whole numbers of particles over the height (>= 4), increasing");
-  } else if (a.part == "aspect") {
-    if (a.aspects.empty()) throw std::runtime_error("--part aspect needs --aspects");
-  } else {
-    throw std::runtime_error("--part is column or aspect");
+  Args() : RungArgs({.taken = "--scene --records --out --label --set --report-only --known-failure --keep --resolutions",
+                     .out = "granular_column_collapse_out",
+                     .label = "bui2008",
+                     .required = "--scene"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--part", part) || r.value("--resolution", resolution) || r.list("--aspects", aspects);
   }
-  return a;
-}
+  void validate() override {
+    if (part == "column") {
+      if (resolutions.empty()) throw std::runtime_error("--part column needs --resolutions");
+      rubble::verification::require_increasing_whole(resolutions, 4, "particles over the height");
+    } else if (part == "aspect") {
+      if (aspects.empty()) throw std::runtime_error("--part aspect needs --aspects");
+    } else {
+      throw std::runtime_error("--part is column or aspect");
+    }
+  }
+};
 
 // ---- geometry and scene ------------------------------------------------------
 struct Setup {
@@ -531,12 +518,7 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
   const rubble::Scene scene = build_scene(args, st);
   r.st = st;
   const std::string out = args.out + "_" + tag;
-  std::filesystem::remove_all(out);
-  rubble::RunOptions opt;
-  opt.out_dir = out;
-  opt.write_output = true;
-  opt.quiet = true;
-  const rubble::FinalState fs = rubble::run_scene(scene, opt);
+  const rubble::FinalState fs = rubble::verification::run_into(scene, out);
   r.particles = fs.m.size();
   r.steps = static_cast<long long>(fs.steps);
   r.wall = fs.wall_seconds;
@@ -544,12 +526,7 @@ Result run_one(const Args& args, Setup st, double n, const std::string& tag, boo
               args.label.c_str(), tag.c_str(), st.dx, st.L0, st.H0, st.a, st.nx, st.ny, r.particles, r.steps, st.t_end,
               r.wall);
 
-  std::vector<std::filesystem::path> files;
-  for (int k = 0;; ++k) {
-    const auto f = std::filesystem::path(out) / rubble::snapshot_filename(scene.output.name, k);
-    if (!std::filesystem::exists(f)) break;
-    files.push_back(f);
-  }
+  const std::vector<std::filesystem::path> files = rubble::verification::snapshot_files(out, scene.output.name);
   if (files.size() < 3) throw std::runtime_error("fewer than three snapshots written");
   r.outputs = int(files.size());
   r.min_pair = 1e300;
@@ -802,13 +779,9 @@ int run_column(const Args& args) {
                   r.front[k], exp_front[k], front_rel.back());
     }
     if (i >= 1) std::printf("  n = %g surface change from the previous resolution: %.2e m (mean |dh|)\n", r.n, surface_change);
-    const Json record = Json::object({
-        {"rung", "granular_column_collapse"},
-        {"case", args.label},
-        {"resolution", r.n},
-        {"resolution_name", "particles over the column height H0/dx"},
-        {"n_particles", r.particles},
-        {"dimension", 2},
+    const Json record = rubble::verification::record_head("granular_column_collapse", args.label, r.n,
+                                                          "particles over the column height H0/dx", r.particles,
+                                                          2).with({
         {"parameters", common_parameters(base, args)},
         {"units", Json::object({{"x", "m"}, {"h", "m"}, {"runout", "m"}, {"height", "m"}, {"surface", "m"}})},
         {"errors", Json::object(errors)},
@@ -868,7 +841,7 @@ int run_column(const Args& args) {
                                        record, rubble::backend_name(rubble::default_backend()));
   }
   (void)ok;
-  return args.report_only ? 0 : rubble::verification::rung_exit_status(all_checks, args.known_failures);
+  return args.exit_status(all_checks);
 }
 
 double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
@@ -978,18 +951,14 @@ int run_aspect(const Args& args) {
   rubble::verification::write_record(args.records, "granular_column_collapse-" + args.label + "-" +
                                                        rubble::verification::exact_number(args.resolution) + "-cpu", record, rubble::backend_name(rubble::default_backend()));
   (void)ok;
-  return args.report_only ? 0 : rubble::verification::rung_exit_status(all_checks, args.known_failures);
+  return args.exit_status(all_checks);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines appear as they are written (ctest logs)
-  try {
-    const Args a = parse_args(argc, argv);
+  return rubble::verification::rung_main<Args>("granular_column_collapse_rung: ", argc, argv, [](const Args& a) {
     return a.part == "column" ? run_column(a) : run_aspect(a);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "granular_column_collapse_rung: %s\n", e.what());
-    return 2;
-  }
+  });
 }

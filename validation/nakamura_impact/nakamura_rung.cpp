@@ -53,9 +53,8 @@
 #include <string>
 #include <vector>
 
-#include "../../verification/common/args.hpp"
 #include "../../verification/common/conserved_csv.hpp"
-#include "../../verification/common/record.hpp"
+#include "../../verification/common/rung.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/run.hpp"
@@ -73,26 +72,16 @@ const char* kExperimentNote =
     "available); no experimental value is used";
 constexpr double kExperimentProjectileMass = 0.2e-3;  // [kg] Nakamura & Fujiwara 1991, as quoted in issue #18
 
-struct Args {
-  std::string scene, records = "reports/records", out = "nakamura_out", label = "nakamura_fujiwara_1991";
-  std::vector<double> resolutions;
-  std::vector<std::string> sets, known_failures;
-  bool keep = false;
+struct Args : rubble::verification::RungArgs {
+  Args() : RungArgs({.taken = "--scene --records --out --label --set --known-failure --keep --resolutions",
+                     .out = "nakamura_out",
+                     .label = "nakamura_fujiwara_1991",
+                     .required = "--scene"}) {}
+  void validate() override {
+    if (resolutions.empty()) throw std::runtime_error("need --resolutions");
+    rubble::verification::require_increasing_whole(resolutions, 8, "particles across the target's diameter");
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
-          r.value("--label", a.label) || r.append("--set", a.sets) || r.append("--known-failure", a.known_failures) ||
-          r.flag("--keep", a.keep) || r.list("--resolutions", a.resolutions)))
-      r.unknown();
-  if (a.scene.empty()) throw std::runtime_error("need --scene");
-  if (a.resolutions.empty()) throw std::runtime_error("need --resolutions");
-  rubble::verification::require_increasing_whole(a.resolutions, 8, "particles across the target's diameter");
-  return a;
-}
 
 // The spacing in [0.75 dx, 1.25 dx] whose lattice (the solver's own:
 // lattice_points) holds the mass of the sphere `prj` most closely (the first
@@ -164,21 +153,12 @@ Result run_one(const Args& a, double n, bool keep_shots) {
   r.n = n;
   const rubble::Scene scene = build_scene(a, n, r);
   const fs::path out = fs::path(a.out) / ("n" + exact_number(n));
-  fs::remove_all(out);
-  rubble::RunOptions opt;
-  opt.out_dir = out.string();
-  opt.quiet = true;
-  const rubble::FinalState fin = rubble::run_scene(scene, opt);
+  const rubble::FinalState fin = rubble::verification::run_into(scene, out);
   r.wall = fin.wall_seconds;
   r.steps = static_cast<long long>(fin.steps);
   r.particles = fin.m.size();
 
-  std::vector<fs::path> files;
-  for (int k = 0;; ++k) {
-    const fs::path f = out / rubble::snapshot_filename(scene.output.name, k);
-    if (!fs::exists(f)) break;
-    files.push_back(f);
-  }
+  const std::vector<fs::path> files = rubble::verification::snapshot_files(out, scene.output.name);
   if (files.size() < 3) throw std::runtime_error("fewer than three snapshots written");
   r.D_min = 1e300;
   r.D_max = -1e300;
@@ -248,10 +228,7 @@ Result run_one(const Args& a, double n, bool keep_shots) {
 
 Json shot_json(const Shot& s) { return Json::object({{"t", s.t}, {"x", s.x}, {"y", s.y}, {"D", s.D}}); }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args a = parse_args(argc, argv);
+int run(const Args& a) {
   std::vector<Check> all_checks;
   std::vector<Result> results;
   for (std::size_t i = 0; i < a.resolutions.size(); ++i)
@@ -272,17 +249,9 @@ int main(int argc, char** argv) try {
          "the fragment finder puts every particle in exactly one fragment (ci/fragments, issue #18 item 5); "
          "fragments.csv holds 9 significant digits, so the sum's rounding stays below 5e-9 of the total"},
     };
-    std::vector<Json> cj;
     bool ok = true;
-    for (const Check& c : checks) {
-      const bool pass = c.passed();
-      ok = ok && pass;
-      cj.push_back(c.json());
-      all_checks.push_back(c);
-      std::printf("  %s %s: %.4g (%s %.4g)\n", pass ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
-                  c.threshold);
-    }
-    (void)ok;
+    const Json checks_json = rubble::verification::judge_checks(checks, ok);
+    all_checks.insert(all_checks.end(), checks.begin(), checks.end());
     std::vector<double> cum_n, cum_m;  // N(>= M) against M/M_total
     for (std::size_t k = 0; k < r.frag_mass.size(); ++k) {
       cum_m.push_back(r.frag_mass[k] / r.total_mass);
@@ -292,13 +261,8 @@ int main(int argc, char** argv) try {
     const double largest = r.frag_mass.front() / r.total_mass;
     std::vector<Json> shots;
     for (const Shot& s : r.shots) shots.push_back(shot_json(s));
-    const Json record = Json::object({
-        {"rung", "nakamura_impact"},
-        {"case", a.label},
-        {"resolution", r.n},
-        {"resolution_name", "particles across the target diameter"},
-        {"n_particles", r.particles},
-        {"dimension", 3},
+    const Json record = rubble::verification::record_head("nakamura_impact", a.label, r.n,
+                                                          "particles across the target diameter", r.particles, 3).with({
         {"parameters", Json::object({{"target", "basalt_brittle"},
                                      {"projectile", "nylon"},
                                      {"target_radius", base.bodies[0].radius},
@@ -312,7 +276,7 @@ int main(int argc, char** argv) try {
                                  {"energy", Json::object({{"rel", std::fabs(r.energy_change)}})}})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
-        {"checks", Json::array(cj)},
+        {"checks", checks_json},
         {"dx", r.dx},
         {"projectile", Json::object({{"spacing", r.s_proj}, {"particles", r.proj_particles}, {"mass", r.proj_mass}})},
         {"damage", Json::object({{"t", r.t}, {"mean_D", r.mean_D}, {"broken_fraction", r.broken}})},
@@ -327,8 +291,11 @@ int main(int argc, char** argv) try {
     rubble::verification::write_record(a.records, "nakamura_impact-" + a.label + "-" + exact_number(r.n) + "-cpu",
                                        record, rubble::backend_name(rubble::default_backend()));
   }
-  return rubble::verification::rung_exit_status(all_checks, a.known_failures);
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "nakamura_rung: error: %s\n", e.what());
-  return 2;
+  return a.exit_status(all_checks);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("nakamura_rung: error: ", argc, argv, run);
 }

@@ -50,8 +50,7 @@
 #include <vector>
 
 #include "../../verification/common/conserved_csv.hpp"
-#include "../../verification/common/args.hpp"
-#include "../../verification/common/record.hpp"
+#include "../../verification/common/rung.hpp"
 #include "plate.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
@@ -67,36 +66,28 @@ using rubble::plate::plate_of;
 
 const std::string kSource = "issue #4 item 6 (Gray, Monaghan & Swift 2001)";
 
-struct Args {
-  std::string scene, records = "reports/records", out = "oscillating_plate_out", label = "plate";
-  std::vector<double> resolutions;
-  std::vector<std::string> sets, known_failures;
-  bool report_only = false;
-  bool keep = false;  // keep the run's output folder (snapshots, conserved.csv)
-  double v0 = 0.05;   // initial tip velocity / c_s (issue #4 item 6: 0.05)
+struct Args : rubble::verification::RungArgs {
+  double v0 = 0.05;                // initial tip velocity / c_s (issue #4 item 6: 0.05)
   double finest_tolerance = 0.10;  // issue #4 item 6
   double t_inf_tolerance = 0;      // 0: no extrapolation check (issue #17 item 2: 0.02)
+  // --keep keeps the run's output folder (snapshots, conserved.csv).
+  Args() : RungArgs({.taken = "--scene --records --out --label --set --known-failure --report-only --keep --resolutions",
+                     .out = "oscillating_plate_out",
+                     .label = "plate",
+                     .required = "--scene --resolutions"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--v0", v0) || r.value("--finest-tolerance", finest_tolerance) ||
+           r.value("--t-inf-tolerance", t_inf_tolerance);
+  }
+  void validate() override {
+    rubble::verification::require_increasing_whole(resolutions, 1, "particles through the thickness");
+    if (!(v0 > 0)) throw std::runtime_error("--v0 must be > 0");
+    if (!(finest_tolerance > 0)) throw std::runtime_error("--finest-tolerance must be > 0");
+    if (t_inf_tolerance < 0) throw std::runtime_error("--t-inf-tolerance must be >= 0");
+    if (t_inf_tolerance > 0 && resolutions.size() < 4)
+      throw std::runtime_error("--t-inf-tolerance needs >= 4 resolutions (issue #17 item 2)");
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
-          r.value("--label", a.label) || r.append("--set", a.sets) || r.append("--known-failure", a.known_failures) ||
-          r.flag("--report-only", a.report_only) ||
-          r.flag("--keep", a.keep) || r.value("--v0", a.v0) || r.value("--finest-tolerance", a.finest_tolerance) ||
-          r.value("--t-inf-tolerance", a.t_inf_tolerance) || r.list("--resolutions", a.resolutions)))
-      r.unknown();
-  if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
-  rubble::verification::require_increasing_whole(a.resolutions, 1, "particles through the thickness");
-  if (!(a.v0 > 0)) throw std::runtime_error("--v0 must be > 0");
-  if (!(a.finest_tolerance > 0)) throw std::runtime_error("--finest-tolerance must be > 0");
-  if (a.t_inf_tolerance < 0) throw std::runtime_error("--t-inf-tolerance must be >= 0");
-  if (a.t_inf_tolerance > 0 && a.resolutions.size() < 4)
-    throw std::runtime_error("--t-inf-tolerance needs >= 4 resolutions (issue #17 item 2)");
-  return a;
-}
 
 bool whole_cells(double length, double dx) {
   const double q = length / dx;
@@ -219,12 +210,7 @@ Result run_one(const Args& args, const Plate& p, std::size_t nbodies, double n) 
   int tip_id = 0;
   const rubble::Scene scene = build_scene(args, p, n, nbodies, n_expected, tip_id);
   const std::string out = args.out + "_" + rubble::verification::exact_number(n);
-  std::filesystem::remove_all(out);
-  rubble::RunOptions opt;
-  opt.out_dir = out;
-  opt.write_output = true;
-  opt.quiet = true;
-  const rubble::FinalState fs = rubble::run_scene(scene, opt);
+  const rubble::FinalState fs = rubble::verification::run_into(scene, out);
   r.particles = fs.m.size();
   r.steps = static_cast<long long>(fs.steps);
   r.wall = fs.wall_seconds;
@@ -234,12 +220,7 @@ Result run_one(const Args& args, const Plate& p, std::size_t nbodies, double n) 
               r.steps, r.wall);
 
   // the tip's mean y-displacement at every output; plate shapes at a few
-  std::vector<std::filesystem::path> files;
-  for (int k = 0;; ++k) {
-    const auto f = std::filesystem::path(out) / rubble::snapshot_filename(scene.output.name, k);
-    if (!std::filesystem::exists(f)) break;
-    files.push_back(f);
-  }
+  const std::vector<std::filesystem::path> files = rubble::verification::snapshot_files(out, scene.output.name);
   if (files.size() < 3) throw std::runtime_error("fewer than three snapshots written");
   const double ymid = p.y0 + 0.5 * p.H;
   const double shape_dt = 0.25 * p.period;  // plate shapes every quarter period (theory) ...
@@ -373,23 +354,13 @@ int run(const Args& args) {
     }
     for (Check& c : checks)
       if (!std::isfinite(c.value)) c.value = NAN;  // a run that measured no period fails
-    std::vector<Json> cj;
-    for (const Check& c : checks) {
-      const bool pass = std::isfinite(c.value) && c.passed();
-      cj.push_back(c.json());
-      all.push_back(c);
-      std::printf("  %s %s: %.4g (%s %.4g)\n", pass ? "PASS" : "FAIL", c.name.c_str(), c.value, c.op.c_str(),
-                  c.threshold);
-    }
+    bool passed = true;  // NaN fails every comparison: Check::passed
+    const Json checks_json = rubble::verification::judge_checks(checks, passed);
+    all.insert(all.end(), checks.begin(), checks.end());
     // the coarsest and finest records keep the plate shapes (record size)
     const bool keep_shapes = i == 0 || finest;
-    const Json record = Json::object({
-        {"rung", "oscillating_plate"},
-        {"case", args.label},
-        {"resolution", r.n},
-        {"resolution_name", "particles through the thickness H/dx"},
-        {"n_particles", r.particles},
-        {"dimension", 2},
+    const Json record = rubble::verification::record_head("oscillating_plate", args.label, r.n,
+                                                          "particles through the thickness H/dx", r.particles, 2).with({
         {"parameters", Json::object({{"L", p.L},
                                      {"H", p.H},
                                      {"rho0", p.rho0},
@@ -414,7 +385,7 @@ int run(const Args& args) {
         {"errors", Json::object({{"period", Json::object({{"rel", r.error}})}})},
         {"wall_seconds", r.wall},
         {"steps", r.steps},
-        {"checks", Json::array(cj)},
+        {"checks", checks_json},
         {"dx", r.dx},
         {"period", Json::object({{"measured", r.period},
                                  {"theory", p.period},
@@ -438,16 +409,11 @@ int run(const Args& args) {
     rubble::verification::write_record(args.records, "oscillating_plate-" + args.label + "-" + rubble::verification::exact_number(r.n) + "-cpu", record, rubble::backend_name(rubble::default_backend()));
     prev = &r;
   }
-  return args.report_only ? 0 : rubble::verification::rung_exit_status(all, args.known_failures);
+  return args.exit_status(all);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parse_args(argc, argv));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "oscillating_plate_rung: %s\n", e.what());
-    return 2;
-  }
+  return rubble::verification::rung_main<Args>("oscillating_plate_rung: ", argc, argv, run);
 }

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "../../verification/common/conserved_csv.hpp"
-#include "../../verification/common/record.hpp"
+#include "../../verification/common/rung.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 
@@ -36,33 +36,16 @@ namespace {
 using rubble::verification::Check;
 using rubble::verification::Json;
 
-struct Args {
-  std::string scene, records = "reports/records", out = "rubber_rings_out", label = "rubber_rings";
+struct Args : rubble::verification::RungArgs {
   double spacing = 0.15;
-  std::vector<std::string> sets;
-  bool report_only = false;
-};
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--scene") a.scene = next();
-    else if (k == "--records") a.records = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--label") a.label = next();
-    else if (k == "--spacing") a.spacing = std::stod(next());
-    else if (k == "--set") a.sets.push_back(next());
-    else if (k == "--report-only") a.report_only = true;
-    else throw std::runtime_error("unknown argument " + k);
+  Args() : RungArgs({.taken = "--scene --records --out --label --set --report-only",
+                     .out = "rubber_rings_out",
+                     .label = "rubber_rings"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override { return r.value("--spacing", spacing); }
+  void validate() override {
+    if (scene.empty()) throw std::runtime_error("--scene is required");
   }
-  if (a.scene.empty()) throw std::runtime_error("--scene is required");
-  return a;
-}
+};
 
 struct Output {
   double t = 0;
@@ -143,21 +126,13 @@ int run(const Args& args) {
     throw std::runtime_error("the rubber-ring scene is 2-D with two materials (one per ring) and two bodies");
   const double dx = args.spacing;
 
-  std::filesystem::remove_all(args.out);
-  rubble::RunOptions opt;
-  opt.out_dir = args.out;
-  opt.write_output = true;
-  opt.quiet = true;
-  const rubble::FinalState fs = rubble::run_scene(scene, opt);
+  const rubble::FinalState fs = rubble::verification::run_into(scene, args.out);
   std::printf("%s dx=%g: N = %zu, %lld steps, wall %.1f s\n", args.label.c_str(), dx, fs.m.size(),
               static_cast<long long>(fs.steps), fs.wall_seconds);
 
   std::vector<Output> outs;
-  for (int k = 0;; ++k) {
-    const std::filesystem::path p = std::filesystem::path(args.out) / rubble::snapshot_filename(scene.output.name, k);
-    if (!std::filesystem::exists(p)) break;
+  for (const auto& p : rubble::verification::snapshot_files(args.out, scene.output.name))
     outs.push_back(measure(p.string(), dx));
-  }
   if (outs.size() < 2) throw std::runtime_error("fewer than two snapshots written");
 
   const auto rows = rubble::verification::read_conserved_csv((std::filesystem::path(args.out) / "conserved.csv").string());
@@ -218,13 +193,8 @@ int run(const Args& args) {
     strip.push_back(Json::object({{"t", o.t}, {"x", o.x}, {"y", o.y}, {"rho", o.rho}}));
   }
   const rubble::MaterialConfig& mat = scene.materials[0];
-  const Json record = Json::object({
-      {"rung", "rubber_rings"},
-      {"case", args.label},
-      {"resolution", 1.0 / dx},
-      {"resolution_name", "1/dx"},
-      {"n_particles", fs.m.size()},
-      {"dimension", 2},
+  const Json record = rubble::verification::record_head("rubber_rings", args.label, 1.0 / dx, "1/dx", fs.m.size(),
+                                                        2).with({
       {"parameters", Json::object({{"dx", dx},
                                    {"mu", mat.shear_modulus},
                                    {"artificial_stress", mat.artificial_stress.enabled},
@@ -251,10 +221,5 @@ int run(const Args& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parse_args(argc, argv));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rubber_rings_rung: %s\n", e.what());
-    return 2;
-  }
+  return rubble::verification::rung_main<Args>("rubber_rings_rung: ", argc, argv, run);
 }

@@ -52,8 +52,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/gravity/direct.hpp"
 #include "rubble/gravity/octree.hpp"
 
@@ -65,8 +64,8 @@ using rubble::verification::Json;
 
 namespace {
 
-struct Args {
-  std::string mode, dist = "plummer", records = "reports/records", label;
+struct Args : rubble::verification::RungArgs {
+  std::string mode, dist = "plummer";
   std::size_t n = 20000;
   std::vector<double> thetas{0.3, 0.5, 0.7};
   std::vector<double> sizes{10000, 30000, 100000};
@@ -74,34 +73,39 @@ struct Args {
   double direct_max = 1e5;
   int seeds = 12;
   std::vector<double> roots{1.25, 1.5};
-  bool checks = false, report_only = false;
+
+  Args() : RungArgs({.taken = "--records --label --checks --report-only"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--case", dist) || r.value("--n", n_read) || r.list("--thetas", thetas) ||
+           r.list("--sizes", sizes) || r.words("--orders", order_names) || r.value("--direct-max", direct_max) ||
+           r.value("--seeds", seeds) || r.list("--roots", roots);
+  }
+  void validate() override {
+    n = std::size_t(n_read);
+    if (!order_names.empty()) {
+      orders.clear();
+      for (const std::string& item : order_names) {
+        if (item == "monopole") orders.push_back(MultipoleOrder::Monopole);
+        else if (item == "quadrupole") orders.push_back(MultipoleOrder::Quadrupole);
+        else throw std::runtime_error("--orders: unknown order " + item);
+      }
+    }
+    if (dist != "plummer" && dist != "uniform") throw std::runtime_error("--case must be plummer or uniform");
+  }
+
+ private:
+  double n_read = 20000;
+  std::vector<std::string> order_names;
 };
 
+// The mode word first (accuracy, timing, scatter), then the options.
 Args parse_args(int argc, char** argv) {
   if (argc < 2) throw std::runtime_error("usage: bh_rung accuracy|timing|scatter [options]");
   Args a;
   a.mode = argv[1];
   if (a.mode != "accuracy" && a.mode != "timing" && a.mode != "scatter")
     throw std::runtime_error("first argument must be accuracy, timing or scatter");
-  double n = double(a.n);
-  std::vector<std::string> orders;
-  rubble::verification::ArgReader r(argc, argv, 2);
-  while (!r.done())
-    if (!(r.value("--case", a.dist) || r.value("--n", n) || r.list("--thetas", a.thetas) ||
-          r.list("--sizes", a.sizes) || r.words("--orders", orders) || r.value("--direct-max", a.direct_max) ||
-          r.value("--seeds", a.seeds) || r.list("--roots", a.roots) || r.value("--records", a.records) ||
-          r.value("--label", a.label) || r.flag("--checks", a.checks) || r.flag("--report-only", a.report_only)))
-      r.unknown();
-  a.n = std::size_t(n);
-  if (!orders.empty()) {
-    a.orders.clear();
-    for (const std::string& item : orders) {
-      if (item == "monopole") a.orders.push_back(MultipoleOrder::Monopole);
-      else if (item == "quadrupole") a.orders.push_back(MultipoleOrder::Quadrupole);
-      else throw std::runtime_error("--orders: unknown order " + item);
-    }
-  }
-  if (a.dist != "plummer" && a.dist != "uniform") throw std::runtime_error("--case must be plummer or uniform");
+  a.parse(argc, argv, 2);
   return a;
 }
 
@@ -307,13 +311,9 @@ int run_accuracy(const Args& args) {
         all_passed = all_passed && c.passed();
       }
       // theta = 0 is a case of its own (its 1/theta would be infinite).
-      const Json record = Json::object({
-          {"rung", "barnes_hut"},
-          {"case", theta > 0 ? label : label + "_theta0"},
-          {"resolution", theta > 0 ? 1.0 / theta : double(n)},
-          {"resolution_name", theta > 0 ? "1/theta" : "N"},
-          {"n_particles", n},
-          {"dimension", 3},
+      const Json record = rubble::verification::record_head("barnes_hut", theta > 0 ? label : label + "_theta0",
+                                                            theta > 0 ? 1.0 / theta : double(n),
+                                                            theta > 0 ? "1/theta" : "N", n, 3).with({
           {"parameters", Json::object({{"distribution", args.dist},
                                        {"order", order_name(order)},
                                        {"leaf_size", int(setting.leaf_size)},
@@ -430,13 +430,7 @@ int run_timing(const Args& args) {
     const bool last = k + 1 == rows.size();
     const Json errs = r.direct >= 0 ? Json::object({{"acc", stats_json(r.err)}})
                                     : Json::object({{"acc", Json::object({{"median", Json()}})}});
-    const Json record = Json::object({
-        {"rung", "barnes_hut"},
-        {"case", label},
-        {"resolution", double(r.n)},
-        {"resolution_name", "N"},
-        {"n_particles", r.n},
-        {"dimension", 3},
+    const Json record = rubble::verification::record_head("barnes_hut", label, double(r.n), "N", r.n, 3).with({
         {"parameters", Json::object({{"distribution", args.dist},
                                      {"order", order_name(opt.order)},
                                      {"theta", double(opt.theta)},
@@ -772,13 +766,7 @@ int run_scatter(const Args& args) {
       mean_med += ours.median[k] / double(seeds);
       mean_p99 += ours.p99[k] / double(seeds);
     }
-    const Json record = Json::object({
-        {"rung", "barnes_hut"},
-        {"case", label},
-        {"resolution", 1.0 / c.theta},
-        {"resolution_name", "1/theta"},
-        {"n_particles", n},
-        {"dimension", 3},
+    const Json record = rubble::verification::record_head("barnes_hut", label, 1.0 / c.theta, "1/theta", n, 3).with({
         {"parameters", Json::object({{"distribution", args.dist},
                                      {"order", order_name(c.order)},
                                      {"leaf_size", 1},
@@ -806,11 +794,10 @@ int run_scatter(const Args& args) {
 
 }  // namespace
 
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
-  if (args.mode == "scatter") return run_scatter(args);
-  return args.mode == "accuracy" ? run_accuracy(args) : run_timing(args);
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "bh_rung: error: %s\n", e.what());
-  return 2;
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main("bh_rung: error: ", [&] {
+    const Args args = parse_args(argc, argv);
+    if (args.mode == "scatter") return run_scatter(args);
+    return args.mode == "accuracy" ? run_accuracy(args) : run_timing(args);
+  });
 }

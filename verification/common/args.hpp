@@ -9,7 +9,8 @@
 //           r.flag("--checks", a.checks) || r.append("--set", a.sets)))
 //       r.unknown();
 //
-// Every rung reads its arguments this way.
+// Every rung reads its arguments this way, through rung.hpp's RungArgs
+// (the options rungs share, and the rung's own in its own_option).
 #include <sstream>
 #include <stdexcept>
 #include <string>

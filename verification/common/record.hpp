@@ -146,7 +146,8 @@ inline void write_record(const std::filesystem::path& dir, const std::string& fi
 // The exit status of a rung from its judged checks. A rung's ctest test
 // fails when a check fails, unless the check is a documented known failure:
 // `known_failures` lists parts of check names (given on the command line with the
-// reason next to it in the rung's CMakeLists.txt). A known failure still
+// reason next to it in the rung's CMakeLists.txt, the measurements in the
+// rung's README.md). A known failure still
 // shows as FAIL in its record and in the ladder report. An entry that
 // matches checks none of which fails any more (e.g. the same check at every
 // resolution, all passing now) fails the test too, so that the entry is

@@ -71,8 +71,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/scene.hpp"
@@ -89,29 +88,20 @@ const double kM = kK + 4.0 / 3.0 * kMu;  // uniaxial-strain modulus: sigma_xx = 
 const double kCl = std::sqrt(kM / kRho0);
 constexpr double kCrackSpeed = 0.4;  // c_g / c_l, the default of damage.crack_speed
 
-struct Args {
-  std::string records = "reports/records", out = "fracture_out", label = "bar_1d";
+struct Args : rubble::verification::RungArgs {
   std::vector<double> rates = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5};
   std::vector<double> dynamic = {1e2, 1e3, 1e4, 1e5};
   std::vector<double> lengths = {0.05, 0.1, 0.2, 0.4};
   double dx = 1e-3, length = 0.1, quasi_static = 0.05;
   std::string cap = "active_fraction";
   int min_flaws = 1;
-  std::vector<std::string> known_failures;
+  Args() : RungArgs({.taken = "--records --out --label --known-failure", .out = "fracture_out", .label = "bar_1d"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.list("--rates", rates) || r.list("--dynamic", dynamic) || r.list("--lengths", lengths) ||
+           r.value("--dx", dx) || r.value("--length", length) || r.value("--quasi-static", quasi_static) ||
+           r.value("--cap", cap) || r.value("--min-flaws", min_flaws);
+  }
 };
-
-Args parse(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--records", a.records) || r.value("--out", a.out) || r.value("--label", a.label) ||
-          r.list("--rates", a.rates) || r.list("--dynamic", a.dynamic) || r.list("--lengths", a.lengths) ||
-          r.value("--dx", a.dx) || r.value("--length", a.length) || r.value("--quasi-static", a.quasi_static) ||
-          r.value("--cap", a.cap) || r.value("--min-flaws", a.min_flaws) ||
-          r.append("--known-failure", a.known_failures)))
-      r.unknown();
-  return a;
-}
 
 // The bar strain at the peak of the mean-field Grady-Kipp stress (see the
 // header): eps_dot t_p.
@@ -181,17 +171,11 @@ BarResult run_bar(double L, double eps_dot, const Args& a, const fs::path& dir) 
   double end_time = 0;
   const rubble::Scene scene =
       rubble::parse_scene(bar_scene(L, eps_dot, a.dx, a.cap, a.min_flaws, end_time), "fracture_bar.toml");
-  fs::remove_all(dir);
-  rubble::RunOptions opt;
-  opt.out_dir = dir.string();
-  opt.quiet = true;
-  const rubble::FinalState fin = rubble::run_scene(scene, opt);
+  const rubble::FinalState fin = rubble::verification::run_into(scene, dir);
   BarResult r;
   r.wall = fin.wall_seconds;
   r.steps = fin.steps;
-  for (int k = 0;; ++k) {
-    const fs::path f = dir / rubble::snapshot_filename(scene.output.name, k);
-    if (!fs::exists(f)) break;
+  for (const fs::path& f : rubble::verification::snapshot_files(dir, scene.output.name)) {
     rubble::ParticleStore<1> ps;
     rubble::SnapshotMeta meta;
     rubble::read_snapshot<1>(f.string(), ps, meta);
@@ -222,10 +206,7 @@ double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
   return -rubble::verification::observed_order(x, y);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args a = parse(argc, argv);
+int run(const Args& a) {
   std::vector<Check> checks;
   // (1) the strain-rate law at the bar of length `length`
   std::vector<double> sig, tf, walls, sig_gk;
@@ -290,8 +271,11 @@ int main(int argc, char** argv) try {
       {"checks", check_json},
   });
   rubble::verification::write_record(a.records, a.label, record, "cpu");
-  return rubble::verification::rung_exit_status(checks, a.known_failures);
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "fracture_rung: error: %s\n", e.what());
-  return 2;
+  return a.exit_status(checks);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("fracture_rung: error: ", argc, argv, run);
 }

@@ -33,9 +33,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "../common/args.hpp"
 #include "../common/conserved_csv.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/drivers/material_params.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
@@ -50,28 +49,14 @@ namespace {
 
 const std::string kIssue = "issue #11 item 6";
 
-struct Args {
-  std::string scene, records = "reports/records", out = "p_alpha_impact_out", label = "impact_2d";
-  std::vector<std::string> sets, known_failures;
-  bool keep = false;
+struct Args : rubble::verification::RungArgs {
+  Args() : RungArgs({.taken = "--scene --records --out --label --set --keep --known-failure",
+                     .out = "p_alpha_impact_out",
+                     .label = "impact_2d",
+                     .required = "--scene"}) {}
 };
 
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
-          r.value("--label", a.label) || r.append("--set", a.sets) || r.flag("--keep", a.keep) ||
-          r.append("--known-failure", a.known_failures)))
-      r.unknown();
-  if (a.scene.empty()) throw std::runtime_error("need --scene");
-  return a;
-}
-
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
+int run(const Args& args) {
   const Scene scene = load_scene_file(args.scene, args.sets);
   if (scene.simulation.dimension != 2) throw std::runtime_error("the impact scene is 2-D");
   // the porous materials and their crush curves
@@ -93,11 +78,7 @@ int main(int argc, char** argv) try {
   if (!(projectile_radius > 0)) throw std::runtime_error("the impact scene needs a projectile (shape = \"sphere\")");
 
   const std::filesystem::path out = args.out;
-  std::filesystem::remove_all(out);
-  RunOptions opt;
-  opt.out_dir = out.string();
-  opt.quiet = true;
-  const FinalState fs = run_scene(scene, opt);
+  const FinalState fs = rubble::verification::run_into(scene, out);
 
   double max_excess = -1e300, min_alpha = 1e300, max_rise = 0;
   long rises = 0, judged = 0;
@@ -105,9 +86,9 @@ int main(int argc, char** argv) try {
   std::unordered_map<std::int32_t, double> prev;  // id -> alpha at the previous output
   ParticleStore<2> last;
   SnapshotMeta last_meta;
-  for (int k = 0;; ++k) {
-    const auto f = out / snapshot_filename(scene.output.name, k);
-    if (!std::filesystem::exists(f)) break;
+  const std::vector<std::filesystem::path> files = rubble::verification::snapshot_files(out, scene.output.name);
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    const std::filesystem::path& f = files[k];
     ParticleStore<2> ps;
     SnapshotMeta meta;
     read_snapshot<2>(f.string(), ps, meta);
@@ -225,8 +206,11 @@ int main(int argc, char** argv) try {
                 c.threshold);
   if (!args.keep) std::filesystem::remove_all(out);
   (void)all_passed;
-  return rubble::verification::rung_exit_status(checks, args.known_failures);
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "p_alpha_impact: error: %s\n", e.what());
-  return 2;
+  return args.exit_status(checks);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("p_alpha_impact: error: ", argc, argv, run);
 }

@@ -110,8 +110,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/physics/eos/eos.hpp"
@@ -136,32 +135,21 @@ std::string viscosity_label(const rubble::ArtificialViscosity& v) {
 }
 
 
-struct Args {
-  std::string part, which_case, scene, records = "reports/records", label;
-  std::vector<double> resolutions;
-  std::vector<std::string> sets;
-  std::vector<std::string> known_failures;  // --known-failure PREFIX (record.hpp: rung_exit_status)
+struct Args : rubble::verification::RungArgs {
+  std::string part, which_case;
   int levels = 7;
-  bool checks = false;
+  Args() : RungArgs({.taken = "--scene --records --label --set --checks --known-failure --resolutions"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--part", part) || r.value("--case", which_case) || r.value("--levels", levels);
+  }
+  void validate() override {
+    if (part != "forced" && part != "piston") throw std::runtime_error("--part forced|piston");
+    if (part == "forced" && which_case.empty()) throw std::runtime_error("--part forced needs --case");
+    if (part == "piston" && (scene.empty() || resolutions.empty()))
+      throw std::runtime_error("--part piston needs --scene and --resolutions");
+    if (levels < 5) throw std::runtime_error("--levels must be >= 5 (the step is halved at least 4 times)");
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--part", a.part) || r.value("--case", a.which_case) || r.value("--scene", a.scene) ||
-          r.value("--records", a.records) || r.value("--label", a.label) || r.append("--set", a.sets) ||
-          r.value("--levels", a.levels) || r.flag("--checks", a.checks) ||
-          r.append("--known-failure", a.known_failures) || r.list("--resolutions", a.resolutions)))
-      r.unknown();
-  if (a.part != "forced" && a.part != "piston") throw std::runtime_error("--part forced|piston");
-  if (a.part == "forced" && a.which_case.empty()) throw std::runtime_error("--part forced needs --case");
-  if (a.part == "piston" && (a.scene.empty() || a.resolutions.empty()))
-    throw std::runtime_error("--part piston needs --scene and --resolutions");
-  if (a.levels < 5) throw std::runtime_error("--levels must be >= 5 (the step is halved at least 4 times)");
-  return a;
-}
-
 
 void print_checks(const std::vector<Check>& checks) {
   for (const auto& c : checks)
@@ -578,10 +566,7 @@ int run_piston(const Args& args) {
     const PorousPiston exact(matrix, por, rho0, 0.0, kDrive);
     const PorousPistonSolution& S = exact.solution();
 
-    RunOptions opt;
-    opt.write_output = false;
-    opt.quiet = true;
-    const FinalState fs = run_scene(scene, opt);
+    const FinalState fs = rubble::verification::run_in_memory(scene);
     const double t = fs.time;
     if (fs.alpha.size() != fs.rho.size()) throw std::runtime_error("the run returned no alpha field");
     std::vector<Particle> P;
@@ -744,15 +729,13 @@ int run_piston(const Args& args) {
     all_checks.insert(all_checks.end(), checks.begin(), checks.end());
   }
   (void)all_passed;  // the record's own flag; the exit status allows for documented known failures
-  return rubble::verification::rung_exit_status(all_checks, args.known_failures);
+  return args.exit_status(all_checks);
 }
 
 }  // namespace
 
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
-  return args.part == "forced" ? run_forced(args) : run_piston(args);
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "p_alpha_rung: error: %s\n", e.what());
-  return 2;
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("p_alpha_rung: error: ", argc, argv, [](const Args& args) {
+    return args.part == "forced" ? run_forced(args) : run_piston(args);
+  });
 }

@@ -26,9 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
 #include "../common/conserved_csv.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/reference/lane_emden.hpp"
 #include "rubble/run.hpp"
@@ -38,23 +37,14 @@ using rubble::verification::Json;
 
 namespace {
 
-struct Args {
-  std::string scene, records = "reports/records", out = "polytrope_out";
-  std::vector<std::string> sets;
+struct Args : rubble::verification::RungArgs {
   double dynamical_times = 5;
-  bool checks = false;
+  Args()
+      : RungArgs({.taken = "--scene --records --out --set --checks", .out = "polytrope_out", .required = "--scene"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--dynamical-times", dynamical_times);
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
-          r.append("--set", a.sets) || r.value("--dynamical-times", a.dynamical_times) || r.flag("--checks", a.checks)))
-      r.unknown();
-  if (a.scene.empty()) throw std::runtime_error("need --scene");
-  return a;
-}
 
 // One snapshot's radial structure about the centre of mass.
 struct Shape {
@@ -99,10 +89,7 @@ Shape measure(const std::string& path) {
 
 using rubble::verification::ConservedRow;
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
+int run(const Args& args) {
   const rubble::Scene scene = rubble::load_scene_file(args.scene, args.sets);
   if (scene.bodies.size() != 1 || scene.bodies[0].shape != rubble::BodyShape::Polytrope)
     throw std::runtime_error("the scene must hold exactly one polytrope body");
@@ -116,22 +103,14 @@ int main(int argc, char** argv) try {
                              " dynamical times = " + std::to_string(t_stop));
   const rubble::Polytrope model(body.polytropic_index, body.mass, body.radius, G);
 
-  std::filesystem::remove_all(args.out);
-  rubble::RunOptions opt;
-  opt.out_dir = args.out;
-  opt.write_output = true;
-  opt.quiet = true;
-  const rubble::FinalState fs = rubble::run_scene(scene, opt);
+  const rubble::FinalState fs = rubble::verification::run_into(scene, args.out);
   std::printf("polytrope: N = %zu, %lld steps, wall %.1f s\n", fs.m.size(), static_cast<long long>(fs.steps),
               fs.wall_seconds);
 
   // r90 at every snapshot.
   std::vector<Shape> shapes;
-  for (int k = 0;; ++k) {
-    const std::filesystem::path p = std::filesystem::path(args.out) / rubble::snapshot_filename(scene.output.name, k);
-    if (!std::filesystem::exists(p)) break;
+  for (const auto& p : rubble::verification::snapshot_files(args.out, scene.output.name))
     shapes.push_back(measure(p.string()));
-  }
   if (shapes.empty()) throw std::runtime_error("no snapshots written");
   const double r90_exact = model.radius_of_mass_fraction(0.9);
   const Shape* relaxed = nullptr;
@@ -208,13 +187,9 @@ int main(int argc, char** argv) try {
                 c.op.c_str(), c.threshold, c.source.c_str());
   }
 
-  const Json record = Json::object({
-      {"rung", "polytrope"},
-      {"case", "polytrope_n" + std::to_string(int(body.polytropic_index + 0.5))},
-      {"resolution", double(fs.m.size())},
-      {"resolution_name", "N"},
-      {"n_particles", fs.m.size()},
-      {"dimension", 3},
+  const Json record = rubble::verification::record_head("polytrope",
+                                                       "polytrope_n" + std::to_string(int(body.polytropic_index + 0.5)),
+                                                       double(fs.m.size()), "N", fs.m.size(), 3).with({
       {"parameters", Json::object({{"polytropic_index", body.polytropic_index},
                                    {"gamma", scene.materials.at(0).gamma},
                                    {"G", G},
@@ -254,7 +229,10 @@ int main(int argc, char** argv) try {
   });
   rubble::verification::write_record(args.records, "polytrope-n1-" + std::to_string(fs.m.size()), record, rubble::backend_name(rubble::default_backend()));
   return all_passed ? 0 : 1;
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "polytrope_rung: error: %s\n", e.what());
-  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("polytrope_rung: error: ", argc, argv, run);
 }

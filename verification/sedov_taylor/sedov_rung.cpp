@@ -32,8 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 #include "sedov_measure.hpp"
@@ -43,33 +42,25 @@ namespace {
 using rubble::verification::Check;
 using rubble::verification::Json;
 
-struct Args {
-  std::string scene, records = "reports/records", label = "sedov_3d", measure;
-  std::vector<double> resolutions;
-  std::vector<std::string> sets, known_failures;
-  bool report_only = false;
+struct Args : rubble::verification::RungArgs {
+  std::string measure;
   double gamma = 5.0 / 3.0, energy = 1.0, rho0 = 1.0, bin = 0;  // --measure only
-};
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--label", a.label) ||
-          r.list("--resolutions", a.resolutions) || r.append("--set", a.sets) ||
-          r.flag("--report-only", a.report_only) || r.append("--known-failure", a.known_failures) ||
-          r.value("--measure", a.measure) || r.value("--gamma", a.gamma) || r.value("--energy", a.energy) ||
-          r.value("--rho0", a.rho0) || r.value("--bin", a.bin)))
-      r.unknown();
-  if (!a.measure.empty()) {
-    if (!(a.gamma > 1) || !(a.energy > 0) || !(a.rho0 > 0) || a.bin < 0)
-      throw std::runtime_error("--measure needs --gamma > 1, --energy > 0, --rho0 > 0, --bin >= 0");
-    return a;
+  Args() : RungArgs({.taken = "--scene --records --label --resolutions --set --report-only --known-failure",
+                     .label = "sedov_3d"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--measure", measure) || r.value("--gamma", gamma) || r.value("--energy", energy) ||
+           r.value("--rho0", rho0) || r.value("--bin", bin);
   }
-  if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
-  rubble::verification::require_increasing_whole(a.resolutions, 8, "particles per side");
-  return a;
-}
+  void validate() override {
+    if (!measure.empty()) {
+      if (!(gamma > 1) || !(energy > 0) || !(rho0 > 0) || bin < 0)
+        throw std::runtime_error("--measure needs --gamma > 1, --energy > 0, --rho0 > 0, --bin >= 0");
+      return;
+    }
+    if (scene.empty() || resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
+    rubble::verification::require_increasing_whole(resolutions, 8, "particles per side");
+  }
+};
 
 Json measures_json(const rubble::verification::SedovMeasures& m) {
   return Json::object({{"shock_radius", m.shock_radius},
@@ -120,10 +111,7 @@ int measure_file(const Args& a) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
+int run(const Args& args) {
   if (!args.measure.empty()) return measure_file(args);
 
   std::vector<double> res_done, err_rho, err_v, err_p, walls;
@@ -140,10 +128,7 @@ int main(int argc, char** argv) try {
     const double rho0 = scene.bodies.at(0).density;
     const rubble::SedovSolution exact(gamma, 3);
 
-    rubble::RunOptions opt;
-    opt.write_output = false;
-    opt.quiet = true;
-    const rubble::FinalState fs = rubble::run_scene(scene, opt);
+    const rubble::FinalState fs = rubble::verification::run_in_memory(scene);
     if (fs.dimension != 3) throw std::runtime_error("the Sedov-Taylor rung is 3-D");
 
     rubble::verification::SedovParticles s;
@@ -249,9 +234,11 @@ int main(int argc, char** argv) try {
     rubble::verification::write_record(args.records, stem, record, fs.backend);
     std::fflush(stdout);
   }
-  const int status = rubble::verification::rung_exit_status(all_checks, args.known_failures);
-  return args.report_only ? 0 : status;
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "sedov_rung: error: %s\n", e.what());
-  return 2;
+  return args.exit_status(all_checks);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("sedov_rung: error: ", argc, argv, run);
 }

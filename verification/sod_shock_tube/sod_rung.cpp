@@ -23,8 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/reference/exact_riemann.hpp"
 #include "rubble/run.hpp"
@@ -34,37 +33,22 @@ using rubble::verification::Json;
 
 namespace {
 
-struct Args {
-  std::string sod_case = "1d", scene, records = "reports/records", label;
-  std::vector<double> resolutions;
-  std::vector<std::string> sets;
-  bool checks = false;
-  bool report_only = false;  // variants: checks are recorded, exit status stays 0
+struct Args : rubble::verification::RungArgs {
+  std::string sod_case = "1d";
+  Args() : RungArgs({.taken = "--scene --records --label --set --checks --report-only --resolutions",
+                     .required = "--scene --resolutions"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override { return r.value("--case", sod_case); }
+  void validate() override {
+    if (label.empty()) label = "sod_" + sod_case;
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--case", a.sod_case) || r.value("--scene", a.scene) || r.value("--records", a.records) ||
-          r.value("--label", a.label) || r.append("--set", a.sets) || r.flag("--checks", a.checks) ||
-          r.flag("--report-only", a.report_only) || r.list("--resolutions", a.resolutions)))
-      r.unknown();
-  if (a.scene.empty() || a.resolutions.empty()) throw std::runtime_error("need --scene and --resolutions");
-  if (a.label.empty()) a.label = "sod_" + a.sod_case;
-  return a;
-}
-
 
 struct Errors {
   double rho = 0, v = 0, p = 0, u = 0;
   std::size_t count = 0;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args args = parse_args(argc, argv);
+int run(const Args& args) {
   const bool three_d = args.sod_case == "3d";
   const double x0 = 0.0;    // interface position in both scenes
   const double window = 0.5;
@@ -86,10 +70,7 @@ int main(int argc, char** argv) try {
     const double gamma = scene.materials.at(0).gamma;
     const rubble::ExactRiemann exact({1.0, 0.0, 1.0}, {0.125, 0.0, 0.1}, gamma);
 
-    rubble::RunOptions opt;
-    opt.write_output = false;
-    opt.quiet = true;
-    const rubble::FinalState fs = rubble::run_scene(scene, opt);
+    const rubble::FinalState fs = rubble::verification::run_in_memory(scene);
     const int D = fs.dimension;
     const std::size_t n = fs.rho.size();
 
@@ -195,7 +176,10 @@ int main(int argc, char** argv) try {
     std::fflush(stdout);
   }
   return (all_passed || args.report_only) ? 0 : 1;
-} catch (const std::exception& e) {
-  std::fprintf(stderr, "sod_rung: error: %s\n", e.what());
-  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return rubble::verification::rung_main<Args>("sod_rung: error: ", argc, argv, run);
 }

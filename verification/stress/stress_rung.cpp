@@ -21,9 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
 #include "../common/conserved_csv.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 
@@ -32,24 +31,16 @@ namespace {
 using rubble::verification::Check;
 using rubble::verification::Json;
 
-struct Args {
-  std::string scene, records, out, label;
+struct Args : rubble::verification::RungArgs {
   double energy_bound = 5e-3;
-  std::vector<std::string> sets;
+  Args() : RungArgs({.taken = "--scene --records --out --label --set", .records = ""}) {}
+  bool own_option(rubble::verification::ArgReader& r) override { return r.value("--energy-bound", energy_bound); }
+  void validate() override {
+    if (scene.empty() || records.empty() || out.empty() || label.empty())
+      throw std::runtime_error("--scene, --records, --out and --label are required");
+    if (!(energy_bound > 0)) throw std::runtime_error("--energy-bound must be > 0");
+  }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--scene", a.scene) || r.value("--records", a.records) || r.value("--out", a.out) ||
-          r.value("--label", a.label) || r.value("--energy-bound", a.energy_bound) || r.append("--set", a.sets)))
-      r.unknown();
-  if (a.scene.empty() || a.records.empty() || a.out.empty() || a.label.empty())
-    throw std::runtime_error("--scene, --records, --out and --label are required");
-  if (!(a.energy_bound > 0)) throw std::runtime_error("--energy-bound must be > 0");
-  return a;
-}
 
 // Whether a RunError's message is the state check's diagnostic: it names a
 // particle of a body, where it was and when.
@@ -61,15 +52,11 @@ bool is_diagnostic(const std::string& what) {
 
 int run(const Args& args) {
   const rubble::Scene scene = rubble::load_scene_file(args.scene, args.sets);
-  std::filesystem::remove_all(args.out);
-  rubble::RunOptions opt;
-  opt.out_dir = args.out;
-  opt.quiet = true;
   rubble::FinalState fs;
   std::string stop;  // the RunError's message, if the run stopped
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    fs = rubble::run_scene(scene, opt);
+    fs = rubble::verification::run_into(scene, args.out);
   } catch (const rubble::RunError& e) {
     stop = e.what();
   }
@@ -107,13 +94,8 @@ int run(const Args& args) {
                       args.energy_bound, "<=", src_energy});
   bool ok = true;
   const Json checks_json = rubble::verification::judge_checks(checks, ok);
-  const Json record = Json::object({
-      {"rung", "stress"},
-      {"case", args.label},
-      {"resolution", 1.0},
-      {"resolution_name", "one run"},
-      {"n_particles", fs.m.size()},
-      {"dimension", scene.simulation.dimension},
+  const Json record = rubble::verification::record_head("stress", args.label, 1.0, "one run", fs.m.size(),
+                                                       scene.simulation.dimension).with({
       {"parameters", Json::object({{"end_time", scene.simulation.end_time}, {"energy_bound", args.energy_bound}})},
       {"errors", Json::object({{"energy", Json::object({{"rel", drift}})}})},
       {"wall_seconds", wall},
@@ -130,10 +112,5 @@ int run(const Args& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parse_args(argc, argv));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "stress_rung: %s\n", e.what());
-    return 2;
-  }
+  return rubble::verification::rung_main<Args>("stress_rung: ", argc, argv, run);
 }

@@ -36,14 +36,12 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <iostream>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "../common/args.hpp"
-#include "../common/record.hpp"
+#include "../common/rung.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/reference/eos_finite_difference.hpp"
@@ -148,18 +146,11 @@ std::string at(double eta, double u) {
 
 Json maxima_json(const Maximum& m) { return Json::object({{"max", m.value}, {"at", m.where}}); }
 
-struct Args {
-  std::string records = "reports/records";
+struct Args : rubble::verification::RungArgs {
   std::vector<std::string> materials;
+  Args() : RungArgs({.taken = "--records"}) {}
+  bool own_option(rubble::verification::ArgReader& r) override { return r.words("--materials", materials); }
 };
-
-Args parse_args(int argc, char** argv) {
-  Args a;
-  rubble::verification::ArgReader r(argc, argv);
-  while (!r.done())
-    if (!(r.value("--records", a.records) || r.words("--materials", a.materials))) r.unknown();
-  return a;
-}
 
 // ---- one Tillotson material ------------------------------------------------------
 
@@ -507,53 +498,52 @@ std::vector<double> geometric(double a, double b, int n) {
   return v;
 }
 
+
+int run(const Args& args) {
+  std::vector<std::string> names = args.materials.empty() ? library_material_names() : args.materials;
+  if (names.empty()) throw std::runtime_error("no library materials found in '" + materials_directory() + "'");
+  bool ok = true;
+  int tillotson = 0;
+  for (const auto& name : names) {
+    const MaterialConfig m = load_material(name);
+    Outcome o;
+    if (m.eos == EosKind::Tillotson) {
+      o = tillotson_case(m, args);
+      ++tillotson;
+    } else if (m.eos == EosKind::Murnaghan) {
+      const EosParams e = eos_params_from_material(m);
+      std::vector<double> rhos;
+      for (double eta : eta_grid()) rhos.push_back(eta * m.murnaghan.rho0);
+      o = fd_case(m.name, e, rhos, {0.0, m.murnaghan.K0 / m.murnaghan.rho0}, m.murnaghan.K0 / m.murnaghan.rho0,
+                  m.murnaghan.K0 / m.murnaghan.rho0, args,
+                  {{"eos", "murnaghan"}, {"rho0", m.murnaghan.rho0}, {"K0", m.murnaghan.K0}, {"n", m.murnaghan.n}});
+    } else {
+      continue;
+    }
+    for (const auto& c : o.checks)
+      if (!c.passed()) std::printf("  FAIL %s: %s: %.3e %s %.3e (%s)\n", name.c_str(), c.name.c_str(), c.value,
+                                   c.op.c_str(), c.threshold, c.source.c_str());
+    ok = ok && o.passed();
+  }
+  if (tillotson == 0) throw std::runtime_error("no Tillotson material in the library");
+  // the ideal gas, for two adiabatic indices
+  for (double gamma : {1.4, 5.0 / 3.0}) {
+    EosParams e;
+    e.kind = EosKind::IdealGas;
+    e.ideal_gas.gamma = Real(gamma);
+    const std::string name = gamma == 1.4 ? "ideal_gas_gamma1.4" : "ideal_gas_gamma5_3";
+    const Outcome o = fd_case(name, e, geometric(1e-3, 1e3, 61), geometric(1e-3, 1e6, 91), 0.0, 0.0, args,
+                              {{"eos", "ideal_gas"}, {"gamma", gamma}});
+    for (const auto& c : o.checks)
+      if (!c.passed()) std::printf("  FAIL %s: %s\n", name.c_str(), c.name.c_str());
+    ok = ok && o.passed();
+  }
+  std::printf("tillotson_continuity: %s\n", ok ? "all checks passed" : "CHECKS FAILED");
+  return ok ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    const Args args = parse_args(argc, argv);
-    std::vector<std::string> names = args.materials.empty() ? library_material_names() : args.materials;
-    if (names.empty()) throw std::runtime_error("no library materials found in '" + materials_directory() + "'");
-    bool ok = true;
-    int tillotson = 0;
-    for (const auto& name : names) {
-      const MaterialConfig m = load_material(name);
-      Outcome o;
-      if (m.eos == EosKind::Tillotson) {
-        o = tillotson_case(m, args);
-        ++tillotson;
-      } else if (m.eos == EosKind::Murnaghan) {
-        const EosParams e = eos_params_from_material(m);
-        std::vector<double> rhos;
-        for (double eta : eta_grid()) rhos.push_back(eta * m.murnaghan.rho0);
-        o = fd_case(m.name, e, rhos, {0.0, m.murnaghan.K0 / m.murnaghan.rho0}, m.murnaghan.K0 / m.murnaghan.rho0,
-                    m.murnaghan.K0 / m.murnaghan.rho0, args,
-                    {{"eos", "murnaghan"}, {"rho0", m.murnaghan.rho0}, {"K0", m.murnaghan.K0}, {"n", m.murnaghan.n}});
-      } else {
-        continue;
-      }
-      for (const auto& c : o.checks)
-        if (!c.passed()) std::printf("  FAIL %s: %s: %.3e %s %.3e (%s)\n", name.c_str(), c.name.c_str(), c.value,
-                                     c.op.c_str(), c.threshold, c.source.c_str());
-      ok = ok && o.passed();
-    }
-    if (tillotson == 0) throw std::runtime_error("no Tillotson material in the library");
-    // the ideal gas, for two adiabatic indices
-    for (double gamma : {1.4, 5.0 / 3.0}) {
-      EosParams e;
-      e.kind = EosKind::IdealGas;
-      e.ideal_gas.gamma = Real(gamma);
-      const std::string name = gamma == 1.4 ? "ideal_gas_gamma1.4" : "ideal_gas_gamma5_3";
-      const Outcome o = fd_case(name, e, geometric(1e-3, 1e3, 61), geometric(1e-3, 1e6, 91), 0.0, 0.0, args,
-                                {{"eos", "ideal_gas"}, {"gamma", gamma}});
-      for (const auto& c : o.checks)
-        if (!c.passed()) std::printf("  FAIL %s: %s\n", name.c_str(), c.name.c_str());
-      ok = ok && o.passed();
-    }
-    std::printf("tillotson_continuity: %s\n", ok ? "all checks passed" : "CHECKS FAILED");
-    return ok ? 0 : 1;
-  } catch (const std::exception& e) {
-    std::cerr << "tillotson_continuity_rung: " << e.what() << "\n";
-    return 2;
-  }
+  return rubble::verification::rung_main<Args>("tillotson_continuity_rung: ", argc, argv, run);
 }
