@@ -11,6 +11,7 @@ H_inf/L0 against a = H0/L0 with the fitted power laws beside the 2-D laws of
 Lube et al. 2005 and Lajeunesse et al. 2005 (as quoted by secondary sources).
 """
 import math
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -19,6 +20,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _lube(a):
@@ -75,9 +78,7 @@ def _snapshot_plot(case, rec, out_dir):
                  label="accumulated plastic strain $\\varepsilon_p$ (clipped at %.1f)" % vmax)
     fig.suptitle(f"column collapse ({case}), H0/dx = {rec['resolution']:g}", fontsize=10)
     name = f"granular_column_collapse-{case}-snapshots.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
-    return (f"collapse coloured by eps_p, H0/dx = {rec['resolution']:g}", name)
+    return save_figure(fig, out_dir, name, f"collapse coloured by eps_p, H0/dx = {rec['resolution']:g}")
 
 
 def _column_plots(case, recs, out_dir):
@@ -112,9 +113,8 @@ def _column_plots(case, recs, out_dir):
     ax.set_title(f"final profiles ({case})", fontsize=10)
     fig.tight_layout()
     name = f"granular_column_collapse-{case}-profiles_final.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
-    images.append(("final free-surface profiles and failure lines against the experiment", name))
+    images.append(save_figure(fig, out_dir, name,
+                              "final free-surface profiles and failure lines against the experiment"))
 
     # The front magnified: the profiles' last few centimetres of height, with
     # the front at each measured thickness (record "front", where present).
@@ -144,11 +144,9 @@ def _column_plots(case, recs, out_dir):
                  "(x experiment, o simulation)", fontsize=9)
     fig.tight_layout()
     name = f"granular_column_collapse-{case}-front.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
     levels = (", ".join(f"{f:g}" for f in fr["thickness_over_H0"]) + " H0") if fr else \
         "a thickness (not in this older record)"
-    images.append((f"the front magnified: where the surface first falls below {levels}", name))
+    images.append(save_figure(fig, out_dir, name, f"the front magnified: where the surface first falls below {levels}"))
 
     fig, ax = plt.subplots(figsize=(6, 3.4))
     for r in recs:
@@ -162,9 +160,7 @@ def _column_plots(case, recs, out_dir):
     ax.legend(fontsize=7)
     fig.tight_layout()
     name = f"granular_column_collapse-{case}-kinetic.png"
-    fig.savefig(out_dir / name, dpi=100)
-    plt.close(fig)
-    images.append(("kinetic energy history", name))
+    images.append(save_figure(fig, out_dir, name, "kinetic energy history", dpi=100))
     return images
 
 
@@ -211,9 +207,8 @@ def _sweep_plots(case, recs, out_dir):
                      fontsize=10)
         fig.tight_layout()
         name = f"granular_column_collapse-{case}-runout_vs_a-{r['resolution']:g}.png"
-        fig.savefig(out_dir / name, dpi=110)
-        plt.close(fig)
-        images.append((f"normalised runout and height against a, resolution {r['resolution']:g}", name))
+        images.append(save_figure(fig, out_dir, name,
+                                  f"normalised runout and height against a, resolution {r['resolution']:g}"))
 
         fig, ax = plt.subplots(figsize=(9, 3.4))
         for run in s["runs"]:
@@ -223,9 +218,8 @@ def _sweep_plots(case, recs, out_dir):
         ax.legend(fontsize=7)
         fig.tight_layout()
         name = f"granular_column_collapse-{case}-sweep_profiles-{r['resolution']:g}.png"
-        fig.savefig(out_dir / name, dpi=100)
-        plt.close(fig)
-        images.append((f"final profiles of the sweep, resolution {r['resolution']:g}", name))
+        images.append(save_figure(fig, out_dir, name,
+                                  f"final profiles of the sweep, resolution {r['resolution']:g}", dpi=100))
     return images
 
 

@@ -9,12 +9,15 @@ could not be read here (the records' "experiment" note), so none is drawn.
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _slug(s: str) -> str:
@@ -49,9 +52,7 @@ def plots(case: str, records: list, out_dir: Path) -> list:
             fig.colorbar(sc, ax=axes, shrink=0.8, label="damage D")
         fig.suptitle(f"target damage in the impact plane (|z| < 3 dx/4), n = {shots_rec['resolution']:g}", fontsize=10)
         name = f"nakamura_impact-{_slug(case)}-damage.png"
-        fig.savefig(out_dir / name, dpi=110)
-        plt.close(fig)
-        out.append((f"damage pattern, {case}", name))
+        out.append(save_figure(fig, out_dir, name, f"damage pattern, {case}"))
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for j, r in enumerate(recs):
@@ -74,7 +75,5 @@ def plots(case: str, records: list, out_dir: Path) -> list:
     axes[1].legend(fontsize=7)
     fig.tight_layout()
     name = f"nakamura_impact-{_slug(case)}-fragments.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
-    out.append((f"damage history and fragment distribution, {case}", name))
+    out.append(save_figure(fig, out_dir, name, f"damage history and fragment distribution, {case}"))
     return out

@@ -7,12 +7,15 @@ history, and the plate's shape at a few times for the coarsest and finest
 resolutions (coloured by the shear stress S_xy).
 """
 import math
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import particle_panels, save_figure  # noqa: E402
 
 
 def plots(case, records, out_dir: Path):
@@ -53,9 +56,7 @@ def plots(case, records, out_dir: Path):
     fig.suptitle(f"oscillating plate ({case}): tip, amplitude decay, period convergence")
     fig.tight_layout()
     name = f"oscillating_plate-{case}-tip.png"
-    fig.savefig(out_dir / name, dpi=100)
-    plt.close(fig)
-    images.append(("tip displacement, amplitude decay and period error", name))
+    images.append(save_figure(fig, out_dir, name, "tip displacement, amplitude decay and period error", dpi=100))
 
     fig, ax = plt.subplots(figsize=(6, 3.6))
     for r in recs:
@@ -71,25 +72,15 @@ def plots(case, records, out_dir: Path):
     ax.legend(fontsize=7)
     fig.tight_layout()
     name = f"oscillating_plate-{case}-energy.png"
-    fig.savefig(out_dir / name, dpi=100)
-    plt.close(fig)
-    images.append(("energy history", name))
+    images.append(save_figure(fig, out_dir, name, "energy history", dpi=100))
 
     for r in recs:
         shapes = r.get("shapes") or []
         if not shapes:
             continue
-        fig, axes = plt.subplots(1, len(shapes), figsize=(3.0 * len(shapes), 2.6), squeeze=False)
         smax = max(max(abs(v) for v in s["Sxy"]) for s in shapes) or 1.0
-        for a, s in zip(axes[0], shapes):
-            sc = a.scatter(s["x"], s["y"], c=s["Sxy"], s=1.0, cmap="coolwarm", vmin=-smax, vmax=smax)
-            a.set_title(f"t = {s['t']:.3f} s", fontsize=9)
-            a.set_aspect("equal")
-            a.set_xticks([])
-            a.set_yticks([])
-        fig.colorbar(sc, ax=axes[0].tolist(), shrink=0.8, label="$S_{xy}$ [Pa]")
+        fig = particle_panels(shapes, "Sxy", lambda s: f"t = {s['t']:.3f} s", "$S_{xy}$ [Pa]", panel=(3.0, 2.6),
+                              s=1.0, cmap="coolwarm", vmin=-smax, vmax=smax)
         name = f"oscillating_plate-{case}-shapes-{r['resolution']:g}.png"
-        fig.savefig(out_dir / name, dpi=100)
-        plt.close(fig)
-        images.append((f"plate shapes, H/dx = {r['resolution']:g}", name))
+        images.append(save_figure(fig, out_dir, name, f"plate shapes, H/dx = {r['resolution']:g}", dpi=100))
     return images

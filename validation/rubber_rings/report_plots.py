@@ -5,12 +5,15 @@ internal, total, relative to the initial kinetic energy), the ring
 diagnostics over time (centre-of-mass x-velocities, closest pair / dx,
 number of connected bodies), and a strip of density snapshots.
 """
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import particle_panels, save_figure  # noqa: E402
 
 
 def _tag(rec):
@@ -51,20 +54,10 @@ def plots(case, records, out_dir: Path):
             fig.suptitle(f"rubber rings {tag}: energy and diagnostics")
             fig.tight_layout()
             name = f"rubber_rings-{case}-{tag}-history.png"
-            fig.savefig(out_dir / name, dpi=100)
-            plt.close(fig)
-            images.append((f"energy and diagnostics {tag}", name))
+            images.append(save_figure(fig, out_dir, name, f"energy and diagnostics {tag}", dpi=100))
         if strip:
-            fig, axes = plt.subplots(1, len(strip), figsize=(3.2 * len(strip), 3.0), squeeze=False)
-            for ax, snap in zip(axes[0], strip):
-                sc = ax.scatter(snap["x"], snap["y"], c=snap["rho"], s=0.5, cmap="viridis", vmin=0.9, vmax=1.1)
-                ax.set_title(f"t = {snap['t']:g}", fontsize=9)
-                ax.set_aspect("equal")
-                ax.set_xticks([])
-                ax.set_yticks([])
-            fig.colorbar(sc, ax=axes[0].tolist(), shrink=0.8, label="density")
+            fig = particle_panels(strip, "rho", lambda snap: f"t = {snap['t']:g}", "density", panel=(3.2, 3.0),
+                                  s=0.5, cmap="viridis", vmin=0.9, vmax=1.1)
             name = f"rubber_rings-{case}-{tag}-density.png"
-            fig.savefig(out_dir / name, dpi=100)
-            plt.close(fig)
-            images.append((f"density snapshots {tag}", name))
+            images.append(save_figure(fig, out_dir, name, f"density snapshots {tag}", dpi=100))
     return images

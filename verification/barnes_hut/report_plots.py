@@ -10,12 +10,15 @@
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _slug(s: str) -> str:
@@ -68,9 +71,7 @@ def _error_vs_theta(case: str, records: list, out_dir: Path):
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     name = f"barnes_hut-{_slug(case)}-error_vs_theta.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
-    return (f"relative acceleration error vs θ, {case}", name)
+    return save_figure(fig, out_dir, name, f"relative acceleration error vs θ, {case}")
 
 
 def _time_vs_n(case: str, records: list, out_dir: Path):
@@ -105,9 +106,7 @@ def _time_vs_n(case: str, records: list, out_dir: Path):
     ax.legend(fontsize=8)
     fig.tight_layout()
     name = f"barnes_hut-{_slug(case)}-time_vs_n.png"
-    fig.savefig(out_dir / name, dpi=110)
-    plt.close(fig)
-    return (f"wall time vs N, {case}", name)
+    return save_figure(fig, out_dir, name, f"wall time vs N, {case}")
 
 
 def plots(case: str, records: list, out_dir: Path) -> list:

@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _slug(s: str) -> str:
@@ -79,7 +82,5 @@ def plots(case: str, records: list, out_dir: Path) -> list:
         ax.legend(fontsize=7)
         fig.tight_layout()
         name = f"fracture_strain_rate-{_slug(case)}-{k}-laws.png"
-        fig.savefig(out_dir / name, dpi=110)
-        plt.close(fig)
-        out.append((f"failure stress against rate and volume, {case}", name))
+        out.append(save_figure(fig, out_dir, name, f"failure stress against rate and volume, {case}"))
     return out

@@ -13,6 +13,7 @@ resolution beside Spheral's regression values at N = 500.
 impact* cases (2-D impact into porous basalt): alpha(p) of the porous
 particles over the crush curve and the compacted zone.
 """
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -20,6 +21,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _finest(records, key):
@@ -61,9 +64,7 @@ def _forced(case, records, out_dir):
         ax.set_title("α(t)")
         ax.legend(fontsize=8)
         name = f"p_alpha_compaction-{case}-trajectory.png"
-        fig.savefig(Path(out_dir) / name, dpi=110)
-        plt.close(fig)
-        images.append((f"α(p) over the crush curve and α(t): {case}", name))
+        images.append(save_figure(fig, out_dir, name, f"α(p) over the crush curve and α(t): {case}"))
     pts = sorted((r["resolution"], r["errors"]["alpha"].get("Linf")) for r in records
                  if "alpha" in r.get("errors", {}) and r["errors"]["alpha"].get("Linf"))
     if len(pts) >= 2:
@@ -77,9 +78,7 @@ def _forced(case, records, out_dir):
         ax.set_title(f"{case}: convergence in dt")
         ax.legend(fontsize=8)
         name = f"p_alpha_compaction-{case}-dt_convergence.png"
-        fig.savefig(Path(out_dir) / name, dpi=110)
-        plt.close(fig)
-        images.append((f"α error against the step: {case}", name))
+        images.append(save_figure(fig, out_dir, name, f"α error against the step: {case}"))
     return images
 
 
@@ -107,9 +106,7 @@ def _piston(case, records, out_dir):
         fig.suptitle(f"{case}: piston compaction at t = {rec.get('parameters', {}).get('t', 0) * 1e6:.3g} µs "
                      "(red: measured fronts, dashed compaction, dotted elastic)")
         name = f"p_alpha_compaction-{case}-profiles_vs_exact.png"
-        fig.savefig(Path(out_dir) / name, dpi=110)
-        plt.close(fig)
-        images.append((f"profiles with the analytic solution: {case}", name))
+        images.append(save_figure(fig, out_dir, name, f"profiles with the analytic solution: {case}"))
     rows = sorted((r["resolution"], r) for r in records if "errors" in r)
     if len(rows) >= 2:
         res = np.array([q[0] for q in rows], float)
@@ -127,9 +124,7 @@ def _piston(case, records, out_dir):
             ax.set_title(f"L1({k})")
         axes[0].legend(fontsize=7)
         name = f"p_alpha_compaction-{case}-l1_vs_spheral.png"
-        fig.savefig(Path(out_dir) / name, dpi=110)
-        plt.close(fig)
-        images.append((f"L1 errors against resolution, with Spheral's values: {case}", name))
+        images.append(save_figure(fig, out_dir, name, f"L1 errors against resolution, with Spheral's values: {case}"))
     return images
 
 
@@ -160,9 +155,8 @@ def _impact(case, records, out_dir):
     ax.set_title(f"compacted zone, {par.get('impact_speed', 0) / 1e3:.3g} km/s basalt disc "
                  f"(R = {par.get('projectile_radius', 0) * 1e3:.3g} mm)")
     name = f"p_alpha_compaction-{case}-impact.png"
-    fig.savefig(Path(out_dir) / name, dpi=110)
-    plt.close(fig)
-    return [(f"porous impact: α(p) over the crush curve and the compacted zone ({case})", name)]
+    return [save_figure(fig, out_dir, name,
+                        f"porous impact: α(p) over the crush curve and the compacted zone ({case})")]
 
 
 def plots(case, records, out_dir):

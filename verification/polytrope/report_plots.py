@@ -4,12 +4,15 @@ of the damped relaxation marked and the ±2 % band of the check."""
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _slug(s: str) -> str:
@@ -54,6 +57,4 @@ def plots(case: str, records: list, out_dir: Path) -> list:
     fig.suptitle(f"polytrope / {case}, N = {r.get('n_particles')} (grey: end of damping)", fontsize=10)
     fig.tight_layout()
     name = f"polytrope-{_slug(case)}-radius_energy.png"
-    fig.savefig(Path(out_dir) / name, dpi=110)
-    plt.close(fig)
-    return [(f"radius and energy vs time, {case}", name)]
+    return [save_figure(fig, out_dir, name, f"radius and energy vs time, {case}")]

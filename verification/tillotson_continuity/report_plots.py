@@ -7,6 +7,7 @@ vaporisation between, expanded hot above), the tested tension cut-off
 eta = rho_limit (dashed), and on the c_s map the states where the sound-speed
 floor c^2 = A/rho0 applies (hatched).
 """
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -15,6 +16,8 @@ matplotlib.use("Agg")
 import matplotlib.colors as mcolors  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "verification" / "common"))
+from report_figures import save_figure  # noqa: E402
 
 
 def _newest_with_maps(records):
@@ -84,6 +87,4 @@ def plots(case, records, out_dir):
         _boundaries(ax, m, eta.min(), u.max())
 
     name = f"tillotson_continuity-{case}-maps.png"
-    fig.savefig(Path(out_dir) / name, dpi=110)
-    plt.close(fig)
-    return [(f"p and c_s maps, regime boundaries: {case}", name)]
+    return [save_figure(fig, out_dir, name, f"p and c_s maps, regime boundaries: {case}")]
