@@ -35,7 +35,7 @@
 
 #include "../common/conserved_csv.hpp"
 #include "../common/rung.hpp"
-#include "rubble/drivers/material_params.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/physics/porosity.hpp"
 #include "rubble/run.hpp"
