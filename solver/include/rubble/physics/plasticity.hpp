@@ -85,13 +85,16 @@ struct PlasticReturn {
 //   Extension:   2 sin(a)/(sqrt(3) (3 + sin a))
 inline Real dp_cone_alpha(Real angle_deg, DpConeFit fit) {
   const Real a = angle_deg * Real(3.14159265358979323846) / Real(180);
-  if (fit == DpConeFit::PlaneStrain) {
-    const Real t = std::tan(a);
-    return t / std::sqrt(Real(9) + Real(12) * t * t);
-  }
   const Real s = std::sin(a);
-  const Real meridian = fit == DpConeFit::Compression ? Real(3) - s : Real(3) + s;
-  return Real(2) * s / (std::sqrt(Real(3)) * meridian);
+  switch (fit) {  // no default: a new fit is a compiler warning here
+    case DpConeFit::PlaneStrain: {
+      const Real t = std::tan(a);
+      return t / std::sqrt(Real(9) + Real(12) * t * t);
+    }
+    case DpConeFit::Compression: return Real(2) * s / (std::sqrt(Real(3)) * (Real(3) - s));
+    case DpConeFit::Extension: break;
+  }
+  return Real(2) * s / (std::sqrt(Real(3)) * (Real(3) + s));  // the extension cone
 }
 
 // Drucker–Prager cohesion term k_c:
@@ -100,13 +103,16 @@ inline Real dp_cone_alpha(Real angle_deg, DpConeFit fit) {
 //   Extension:   6 c cos(phi)/(sqrt(3) (3 + sin phi))
 inline Real dp_cone_k(Real phi_deg, Real cohesion, DpConeFit fit) {
   const Real a = phi_deg * Real(3.14159265358979323846) / Real(180);
-  if (fit == DpConeFit::PlaneStrain) {
-    const Real t = std::tan(a);
-    return Real(3) * cohesion / std::sqrt(Real(9) + Real(12) * t * t);
-  }
   const Real s = std::sin(a);
-  const Real meridian = fit == DpConeFit::Compression ? Real(3) - s : Real(3) + s;
-  return Real(6) * cohesion * std::cos(a) / (std::sqrt(Real(3)) * meridian);
+  switch (fit) {  // no default: a new fit is a compiler warning here
+    case DpConeFit::PlaneStrain: {
+      const Real t = std::tan(a);
+      return Real(3) * cohesion / std::sqrt(Real(9) + Real(12) * t * t);
+    }
+    case DpConeFit::Compression: return Real(6) * cohesion * std::cos(a) / (std::sqrt(Real(3)) * (Real(3) - s));
+    case DpConeFit::Extension: break;
+  }
+  return Real(6) * cohesion * std::cos(a) / (std::sqrt(Real(3)) * (Real(3) + s));  // the extension cone
 }
 
 // Drucker–Prager constants from the friction angle phi [deg], the cohesion
@@ -144,10 +150,13 @@ RUBBLE_HD_INLINE Real dp_apex_pressure(const PlasticityParams& pp) {
 template <int D>
 RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S, Real p) {
   const Real j2 = deviatoric_j2(S);
-  if (pp.model == PlasticityModel::VonMises) return std::sqrt(Real(3) * j2) - pp.yield_stress;
-  if (pp.model == PlasticityModel::DruckerPrager) {
-    const Real I1 = Real(-3) * p;
-    return std::sqrt(j2) + pp.alpha_phi * I1 - pp.k_c;
+  switch (pp.model) {  // no default: a new model is a compiler warning here
+    case PlasticityModel::VonMises: return std::sqrt(Real(3) * j2) - pp.yield_stress;
+    case PlasticityModel::DruckerPrager: {
+      const Real I1 = Real(-3) * p;
+      return std::sqrt(j2) + pp.alpha_phi * I1 - pp.k_c;
+    }
+    case PlasticityModel::None: break;
   }
   return Real(-1);
 }
@@ -200,38 +209,42 @@ template <int D>
 RUBBLE_HD_INLINE PlasticReturn<D> plastic_return(const PlasticityParams& pp, const Mat<D>& S, Real p, Real G,
                                                  Real K) {
   PlasticReturn<D> r{S, p, Real(0), Real(0), Real(0), Real(0)};
-  if (pp.model == PlasticityModel::VonMises) {
-    const Real q = std::sqrt(Real(3) * deviatoric_j2(S));
-    if (q > pp.yield_stress) {
-      r.S = S * (pp.yield_stress / q);
-      r.dlambda = G > Real(0) ? (q - pp.yield_stress) / (Real(3) * G) : Real(0);
-    }
-  } else if (pp.model == PlasticityModel::DruckerPrager) {
-    // (1) tension cracking; the cap -alpha_phi I1 + k_c is then exactly 0
-    Real cap = -pp.alpha_phi * (Real(-3) * p) + pp.k_c;
-    if (cap < Real(0)) {
-      r.p = dp_apex_pressure(pp);
-      if (K > Real(0)) r.deps_crack = (r.p - p) / K;
-      cap = Real(0);
-    }
-    // (2) stress scaling / dilatant return
-    const Real sj2 = std::sqrt(deviatoric_j2(S));
-    const Real f = sj2 - cap;
-    if (f > Real(0)) {
-      if (pp.alpha_psi == Real(0)) {
-        r.S = S * (cap / sj2);  // Bui 2008 stress scaling, p unchanged
-        r.dlambda = G > Real(0) ? f / G : Real(0);
-      } else {
-        const Real dl = f / (G + Real(9) * K * pp.alpha_phi * pp.alpha_psi);
-        const Real sj2_new = sj2 - G * dl;
-        r.S = S * (sj2_new / sj2);
-        r.p = r.p + Real(3) * K * pp.alpha_psi * dl;
-        r.dlambda = dl;
-        r.deps_v = Real(3) * pp.alpha_psi * dl;
+  switch (pp.model) {  // no default: a new model is a compiler warning here
+    case PlasticityModel::None: return r;
+    case PlasticityModel::VonMises: {
+      const Real q = std::sqrt(Real(3) * deviatoric_j2(S));
+      if (q > pp.yield_stress) {
+        r.S = S * (pp.yield_stress / q);
+        r.dlambda = G > Real(0) ? (q - pp.yield_stress) / (Real(3) * G) : Real(0);
       }
+      break;
     }
-  } else {
-    return r;
+    case PlasticityModel::DruckerPrager: {
+      // (1) tension cracking; the cap -alpha_phi I1 + k_c is then exactly 0
+      Real cap = -pp.alpha_phi * (Real(-3) * p) + pp.k_c;
+      if (cap < Real(0)) {
+        r.p = dp_apex_pressure(pp);
+        if (K > Real(0)) r.deps_crack = (r.p - p) / K;
+        cap = Real(0);
+      }
+      // (2) stress scaling / dilatant return
+      const Real sj2 = std::sqrt(deviatoric_j2(S));
+      const Real f = sj2 - cap;
+      if (f > Real(0)) {
+        if (pp.alpha_psi == Real(0)) {
+          r.S = S * (cap / sj2);  // Bui 2008 stress scaling, p unchanged
+          r.dlambda = G > Real(0) ? f / G : Real(0);
+        } else {
+          const Real dl = f / (G + Real(9) * K * pp.alpha_phi * pp.alpha_psi);
+          const Real sj2_new = sj2 - G * dl;
+          r.S = S * (sj2_new / sj2);
+          r.p = r.p + Real(3) * K * pp.alpha_psi * dl;
+          r.dlambda = dl;
+          r.deps_v = Real(3) * pp.alpha_psi * dl;
+        }
+      }
+      break;
+    }
   }
   if (G > Real(0)) r.deps_p = std::sqrt(deviatoric_j2(Mat<D>(S - r.S)) / Real(3)) / G;
   return r;

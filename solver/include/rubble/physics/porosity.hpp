@@ -123,10 +123,13 @@ RUBBLE_HD_INLINE Real crush_curve_alpha(const PorosityParams& pp, Real p) {
   if (p <= pp.p_e) return pp.alpha_e;
   if (p >= pp.p_s) return Real(1);
   const Real xs = (pp.p_s - p) / (pp.p_s - pp.p_e);  // in (0, 1)
-  if (pp.curve == CrushCurve::Steep) {
-    Real a = Real(1) + (pp.alpha_t - Real(1)) * std::pow(xs, pp.n2);
-    if (p < pp.p_t) a += (pp.alpha_e - pp.alpha_t) * std::pow((pp.p_t - p) / (pp.p_t - pp.p_e), pp.n1);
-    return a;
+  switch (pp.curve) {  // no default: a new curve is a compiler warning here
+    case CrushCurve::Steep: {
+      Real a = Real(1) + (pp.alpha_t - Real(1)) * std::pow(xs, pp.n2);
+      if (p < pp.p_t) a += (pp.alpha_e - pp.alpha_t) * std::pow((pp.p_t - p) / (pp.p_t - pp.p_e), pp.n1);
+      return a;
+    }
+    case CrushCurve::Quadratic: break;
   }
   return Real(1) + (pp.alpha_e - Real(1)) * xs * xs;
 }
@@ -138,13 +141,16 @@ RUBBLE_HD_INLINE Real crush_curve_alpha(const PorosityParams& pp, Real p) {
 RUBBLE_HD_INLINE Real crush_curve_dalpha_dp(const PorosityParams& pp, Real p) {
   if (p <= pp.p_e || p >= pp.p_s) return Real(0);
   const Real ws = pp.p_s - pp.p_e, xs = (pp.p_s - p) / ws;
-  if (pp.curve == CrushCurve::Steep) {
-    Real d = -pp.n2 * (pp.alpha_t - Real(1)) * std::pow(xs, pp.n2 - Real(1)) / ws;
-    if (p < pp.p_t) {
-      const Real wt = pp.p_t - pp.p_e;
-      d -= pp.n1 * (pp.alpha_e - pp.alpha_t) * std::pow((pp.p_t - p) / wt, pp.n1 - Real(1)) / wt;
+  switch (pp.curve) {  // no default: a new curve is a compiler warning here
+    case CrushCurve::Steep: {
+      Real d = -pp.n2 * (pp.alpha_t - Real(1)) * std::pow(xs, pp.n2 - Real(1)) / ws;
+      if (p < pp.p_t) {
+        const Real wt = pp.p_t - pp.p_e;
+        d -= pp.n1 * (pp.alpha_e - pp.alpha_t) * std::pow((pp.p_t - p) / wt, pp.n1 - Real(1)) / wt;
+      }
+      return d;
     }
-    return d;
+    case CrushCurve::Quadratic: break;
   }
   return Real(-2) * (pp.alpha_e - Real(1)) * xs / ws;
 }
@@ -155,8 +161,11 @@ RUBBLE_HD_INLINE Real crush_curve_dalpha_dp(const PorosityParams& pp, Real p) {
 // gas (no reference density: no elastic branch).
 RUBBLE_HD_INLINE Real porosity_matrix_bulk_modulus(const EosParams& matrix, const PorosityParams& pp) {
   Real rho0 = 0;
-  if (matrix.kind == EosKind::Tillotson) rho0 = matrix.tillotson.rho0;
-  else if (matrix.kind == EosKind::Murnaghan) rho0 = matrix.murnaghan.rho0;
+  switch (matrix.kind) {  // no default: a new kind states its reference density here
+    case EosKind::Tillotson: rho0 = matrix.tillotson.rho0; break;
+    case EosKind::Murnaghan: rho0 = matrix.murnaghan.rho0; break;
+    case EosKind::IdealGas: break;
+  }
   return rho0 * pp.c_s0 * pp.c_s0;
 }
 

@@ -111,15 +111,23 @@ RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
   const EosLimits& l = e.limits;
   // 1. tension cut-off
   if (l.rho_limit > Real(0)) {
-    if (e.kind == EosKind::Murnaghan && rho < l.rho_limit * e.murnaghan.rho0) {
-      if (s.p != Real(0)) s.limited |= kEosTensionCutOff;
-      s.p = Real(0);
-    } else if (e.kind == EosKind::Tillotson && rho < l.rho_limit * e.tillotson.rho0) {
-      const TillotsonState t = tillotson_evaluate(e.tillotson, rho, u);
-      if (t.p_cold != Real(0)) s.limited |= kEosTensionCutOff;
-      const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
-      s.p = hot.p;  // = t.p_hot
-      s.c2 = hot.dpdrho + hot.p / (rho * rho) * hot.dpdu;  // the sound speed of the pressure left
+    switch (e.kind) {  // no default: a new kind states its cut-off here
+      case EosKind::Murnaghan:
+        if (rho < l.rho_limit * e.murnaghan.rho0) {
+          if (s.p != Real(0)) s.limited |= kEosTensionCutOff;
+          s.p = Real(0);
+        }
+        break;
+      case EosKind::Tillotson:
+        if (rho < l.rho_limit * e.tillotson.rho0) {
+          const TillotsonState t = tillotson_evaluate(e.tillotson, rho, u);
+          if (t.p_cold != Real(0)) s.limited |= kEosTensionCutOff;
+          const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
+          s.p = hot.p;  // = t.p_hot
+          s.c2 = hot.dpdrho + hot.p / (rho * rho) * hot.dpdu;  // the sound speed of the pressure left
+        }
+        break;
+      case EosKind::IdealGas: break;  // no reference density (the scene refuses rho_limit)
     }
   }
   // 2. minimum pressure

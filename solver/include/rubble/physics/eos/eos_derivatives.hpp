@@ -96,11 +96,18 @@ RUBBLE_HD_INLINE EosDerivatives eos_pressure_derivatives_limited(const EosParams
   if (s.limited & kEosPressureFloor) return EosDerivatives{Real(0), Real(0)};
   const EosLimits& l = e.limits;
   if (l.rho_limit > Real(0)) {
-    if (e.kind == EosKind::Murnaghan && rho < l.rho_limit * e.murnaghan.rho0) return EosDerivatives{Real(0), Real(0)};
-    if (e.kind == EosKind::Tillotson && rho < l.rho_limit * e.tillotson.rho0) {
-      // rho_limit < 1 in practice, so the state is expanded: p = w_e p_e
-      const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
-      return EosDerivatives{hot.dpdrho, hot.dpdu};
+    switch (e.kind) {  // no default: a new kind states its cut-off here
+      case EosKind::Murnaghan:
+        if (rho < l.rho_limit * e.murnaghan.rho0) return EosDerivatives{Real(0), Real(0)};
+        break;
+      case EosKind::Tillotson:
+        if (rho < l.rho_limit * e.tillotson.rho0) {
+          // rho_limit < 1 in practice, so the state is expanded: p = w_e p_e
+          const TillotsonBranch hot = tillotson_hot_share(e.tillotson, rho, u);
+          return EosDerivatives{hot.dpdrho, hot.dpdu};
+        }
+        break;
+      case EosKind::IdealGas: break;  // no reference density (the scene refuses rho_limit)
     }
   }
   return eos_pressure_derivatives(e, rho, u);
