@@ -60,23 +60,6 @@ EosParams eos_params_from_material(const MaterialConfig& m) {
   return e;
 }
 
-PorosityParams porosity_params_from_config(const PorosityConfig& c) {
-  PorosityParams p{};
-  p.enabled = c.enabled;
-  if (!c.enabled) return p;
-  p.curve = c.crush_curve;
-  p.alpha_e = Real(c.alpha0);
-  p.p_e = Real(c.p_e);
-  p.p_s = Real(c.p_s);
-  p.p_t = Real(c.p_t);
-  p.alpha_t = Real(c.alpha_t);
-  p.n1 = Real(c.n1);
-  p.n2 = Real(c.n2);
-  p.c_e = Real(c.c_e);
-  p.c_s0 = Real(c.c_s0);
-  return p;
-}
-
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   switch (c.model) {  // no default: a new model is a compiler warning here
     case PlasticityModel::VonMises: return von_mises_params(Real(c.yield_stress));
@@ -116,7 +99,7 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     const bool clumping = m.artificial_stress.form == ArtificialStressForm::Clumping;
     p.as_clump_onset = clumping ? Real(m.artificial_stress.clump_onset) : Real(0);
     p.as_clump_full = clumping ? Real(m.artificial_stress.clump_full) : Real(0);
-    p.porosity = porosity_params_from_config(m.porosity);
+    p.porosity = m.porosity;  // the scene holds the model's own parameters
     p.plasticity = plasticity_params_from_config(m.plasticity);
     p.damage = damage_params_from_config(m.damage);
     p.stress_diffusion = Real(m.stress_diffusion);

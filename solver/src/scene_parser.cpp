@@ -789,21 +789,21 @@ MaterialConfig SceneReader::read_material_table(const std::string& p, const toml
 // porosity = { model = "p_alpha", alpha0, p_e, p_s, crush_curve, [p_t, alpha_t, n1, n2], [c_e, c_s0] }
 // (issue #11; Jutzi, Benz & Michel 2008; Jutzi et al. 2009; docs/scene.md).
 void SceneReader::read_porosity(const toml::table& q, const std::string& qp, MaterialConfig& m) {
-  PorosityConfig& c = m.porosity;
+  PorosityParams& c = m.porosity;
   const auto model = string(q, "model", qp);
   if (!model) fail(sub(qp, "model"), "missing required key (the porosity model; \"p_alpha\")");
   choice(q, "model", qp, 0, {{"p_alpha", 0}});
-  c.crush_curve = choice(q, "crush_curve", qp, CrushCurve::Quadratic,
+  c.curve = choice(q, "crush_curve", qp, CrushCurve::Quadratic,
                          {{"quadratic", CrushCurve::Quadratic}, {"steep", CrushCurve::Steep}});
   std::vector<std::string> known = {"model", "crush_curve", "alpha0", "p_e", "p_s", "c_e", "c_s0"};
-  if (c.crush_curve == CrushCurve::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
+  if (c.curve == CrushCurve::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
   check_keys(q, qp, known);
   if (m.eos == EosKind::IdealGas)
     fail(qp, "a porous material needs a Murnaghan or Tillotson matrix; an ideal gas has no solid matrix to compact",
          q.get("model"));
   c.enabled = true;
-  c.alpha0 = required_number(q, "alpha0", qp, "the initial distention alpha0 = rho_s/rho > 1");
-  require(c.alpha0 > 1, q, "alpha0", qp, c.alpha0, "> 1 (alpha = rho_matrix/rho_bulk; 1 is no porosity)");
+  c.alpha_e = required_number(q, "alpha0", qp, "the initial distention alpha0 = rho_s/rho > 1");
+  require(c.alpha_e > 1, q, "alpha0", qp, c.alpha_e, "> 1 (alpha = rho_matrix/rho_bulk; 1 is no porosity)");
   c.p_e = required_number(q, "p_e", qp, "the elastic limit [Pa]");
   require(c.p_e >= 0, q, "p_e", qp, c.p_e, ">= 0");
   c.p_s = required_number(q, "p_s", qp, "the full-compaction pressure [Pa]");
@@ -818,18 +818,16 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
     require(c.c_e > 0 && c.c_e < c.c_s0, q, "c_e", qp, c.c_e,
             "> 0 and < c_s0 = " + fmt(c.c_s0) + " (porous material is elastically softer than its matrix)");
   }
-  if (c.crush_curve == CrushCurve::Steep) {
+  if (c.curve == CrushCurve::Steep) {
     c.p_t = required_number(q, "p_t", qp, "the steep curve's transition pressure [Pa]");
     require(c.p_t > c.p_e && c.p_t < c.p_s, q, "p_t", qp, c.p_t, "between p_e and p_s");
     c.alpha_t = required_number(q, "alpha_t", qp, "the steep curve's distention at p_t");
-    require(c.alpha_t > 1 && c.alpha_t < c.alpha0, q, "alpha_t", qp, c.alpha_t, "> 1 and < alpha0");
+    require(c.alpha_t > 1 && c.alpha_t < c.alpha_e, q, "alpha_t", qp, c.alpha_t, "> 1 and < alpha0");
     c.n1 = required_number(q, "n1", qp, "the steep curve's first exponent");
     require(c.n1 > 0, q, "n1", qp, c.n1, "> 0");
     c.n2 = required_number(q, "n2", qp, "the steep curve's second exponent");
     require(c.n2 > 0, q, "n2", qp, c.n2, "> 0");
-  } else {
-    c.n2 = 2;  // Jutzi 2008 eq. 8
-  }
+  }  // the quadratic curve (Jutzi 2008 eq. 8) has no exponents to set
 }
 
 // plasticity = { model = "von_mises", yield_stress } or
@@ -978,7 +976,7 @@ void SceneReader::check_pressure_reachable(const std::string& p, const toml::tab
                                            double rho, double pressure) const {
   const EosParams e = eos_params_from_material(m);
   // porous: the matrix carries p_s = alpha0 p at rho_s = alpha0 rho
-  const double a0 = m.porosity.enabled ? m.porosity.alpha0 : 1.0;
+  const double a0 = m.porosity.enabled ? m.porosity.alpha_e : 1.0;
   if (eos_internal_energy_from_pressure(e, Real(a0 * rho), Real(a0 * pressure)) >= 0) return;
   const std::string key = sub(p, "pressure");
   if (m.eos == EosKind::Murnaghan) {

@@ -126,18 +126,18 @@ std::vector<double> conserved_column(const std::filesystem::path& dir, const std
 
 TEST(PorosityScene, KeysAreReadWithDefaults) {
   const Scene s = parse_scene(porous_rod(), "t.toml");
-  const PorosityConfig& p = s.materials[0].porosity;
+  const PorosityParams& p = s.materials[0].porosity;
   EXPECT_TRUE(p.enabled);
-  EXPECT_EQ(p.crush_curve, CrushCurve::Quadratic);  // the default
-  EXPECT_EQ(p.alpha0, 1.275);
+  EXPECT_EQ(p.curve, CrushCurve::Quadratic);  // the default
+  EXPECT_EQ(p.alpha_e, 1.275);
   EXPECT_EQ(p.p_e, 8e7);
   EXPECT_EQ(p.p_s, 7e8);
-  EXPECT_EQ(p.n2, 2.0);  // Jutzi 2008 eq. 8
+  EXPECT_EQ(p.n2, 2.0);  // Jutzi 2008 eq. 8 (the quadratic curve's exponent, the params' default)
   const Scene t = parse_scene(porous_rod("porosity = { model = \"p_alpha\", crush_curve = \"steep\", alpha0 = 4.64, "
                                          "alpha_t = 1.9, p_e = 1e6, p_t = 6.8e7, p_s = 2.13e8, n1 = 12.0, n2 = 3.0, "
                                          "c_e = 1500.0, c_s0 = 3000.0 }"),
                               "t.toml");
-  EXPECT_EQ(t.materials[0].porosity.crush_curve, CrushCurve::Steep);
+  EXPECT_EQ(t.materials[0].porosity.curve, CrushCurve::Steep);
   EXPECT_EQ(t.materials[0].porosity.n1, 12.0);
   // the library's porous materials load and validate
   for (const char* name : {"porous_aluminium", "porous_basalt", "pumice"}) {
@@ -152,7 +152,7 @@ TEST(PorosityScene, KeysAreReadWithDefaults) {
 TEST(PorosityScene, ElasticBranchIsOptionalAsAPair) {
   const Scene s =
       parse_scene(porous_rod("porosity = { model = \"p_alpha\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8 }"), "t.toml");
-  const PorosityConfig& p = s.materials[0].porosity;
+  const PorosityParams& p = s.materials[0].porosity;
   EXPECT_TRUE(p.enabled);
   EXPECT_EQ(p.c_e, 0.0);
   EXPECT_EQ(p.c_s0, 0.0);
@@ -161,8 +161,8 @@ TEST(PorosityScene, ElasticBranchIsOptionalAsAPair) {
   EXPECT_EQ(pumice.porosity.c_e, 0.0);
   EXPECT_EQ(pumice.porosity.c_s0, 0.0);
   // J09's pumice curve as PHYSICS.md section 4 prints it; the matrix is Spheral's 'pumice' in SI
-  EXPECT_EQ(pumice.porosity.crush_curve, CrushCurve::Steep);
-  EXPECT_EQ(pumice.porosity.alpha0, 4.64);
+  EXPECT_EQ(pumice.porosity.curve, CrushCurve::Steep);
+  EXPECT_EQ(pumice.porosity.alpha_e, 4.64);
   EXPECT_EQ(pumice.porosity.alpha_t, 1.90);
   EXPECT_EQ(pumice.porosity.p_e, 1e6);
   EXPECT_EQ(pumice.porosity.p_t, 6.8e7);

@@ -64,7 +64,7 @@ int run(const Args& args) {
   bool any_porous = false;
   for (std::size_t k = 0; k < scene.materials.size(); ++k) {
     if (!scene.materials[k].porosity.enabled) continue;
-    pp[k] = porosity_params_from_config(scene.materials[k].porosity);
+    pp[k] = scene.materials[k].porosity;
     any_porous = true;
   }
   if (!any_porous) throw std::runtime_error("the impact scene needs a porous material");

@@ -28,7 +28,6 @@ double smoothing_factor(const SimulationConfig& sim);
 
 // The device-ready parameters of a validated material's parts.
 EosParams eos_params_from_material(const MaterialConfig& m);
-PorosityParams porosity_params_from_config(const PorosityConfig& c);
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
 DamageParams damage_params_from_config(const DamageConfig& c);
 

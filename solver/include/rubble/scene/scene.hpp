@@ -96,20 +96,6 @@ struct ArtificialStressConfig {
   double clump_full = 0.95;  // ... and where it acts in full
 };
 
-// p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009); Murnaghan
-// and Tillotson matrices only. porosity = { model = "p_alpha", ... }; docs/scene.md.
-struct PorosityConfig {
-  bool enabled = false;
-  CrushCurve crush_curve = CrushCurve::Quadratic;
-  double alpha0 = 1;   // initial distention = alpha at the elastic limit (> 1)
-  double p_e = 0;      // [Pa] elastic limit (>= 0)
-  double p_s = 0;      // [Pa] full-compaction pressure (> p_e)
-  double p_t = 0;      // [Pa] steep curve: transition pressure (p_e < p_t < p_s)
-  double alpha_t = 1;  // steep curve: distention at p_t (1 < alpha_t < alpha0)
-  double n1 = 0, n2 = 0;  // steep curve exponents (> 0)
-  double c_e = 0;      // [m/s] porous elastic sound speed (> 0, < c_s0); 0 with c_s0 = 0: no elastic branch
-  double c_s0 = 0;     // [m/s] matrix sound speed (> c_e); 0 with c_e = 0: no elastic branch
-};
 
 // Plasticity of a solid (shear_modulus > 0): von Mises or Drucker-Prager
 // (Bui, Fukagawa, Sako & Ohno 2008); plasticity = { model = ..., ... }.
@@ -155,7 +141,10 @@ struct MaterialConfig {
   double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid
   ArtificialStressConfig artificial_stress;
   double stress_diffusion = 0;  // zeta of the deviatoric stress diffusion (solids; 0 = off)
-  PorosityConfig porosity;      // off unless the material has a porosity table
+  // p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009), the
+  // model's own parameters (physics/porosity.hpp); Murnaghan and Tillotson
+  // matrices only; porosity = { model = "p_alpha", ... }, docs/scene.md.
+  PorosityParams porosity;      // off (enabled = false) unless the material has a porosity table
   PlasticityConfig plasticity;  // none unless the material has a plasticity table
   DamageConfig damage;          // off unless the material has a damage table
 };
