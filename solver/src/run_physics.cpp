@@ -70,18 +70,6 @@ PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   return PlasticityParams{};
 }
 
-DamageParams damage_params_from_config(const DamageConfig& c) {
-  DamageParams d{};
-  d.enabled = c.enabled;
-  if (!c.enabled) return d;
-  d.weibull_k = Real(c.weibull_k);
-  d.weibull_m = Real(c.weibull_m);
-  d.crack_speed = Real(c.crack_speed);
-  d.deviatoric = c.deviatoric;
-  d.capped = c.capped;
-  return d;
-}
-
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
   std::vector<MaterialParams> out;
   for (const auto& m : scene.materials) {
@@ -101,7 +89,7 @@ std::vector<MaterialParams> material_params_from_scene(const Scene& scene) {
     p.as_clump_full = clumping ? Real(m.artificial_stress.clump_full) : Real(0);
     p.porosity = m.porosity;  // the scene holds the model's own parameters
     p.plasticity = plasticity_params_from_config(m.plasticity);
-    p.damage = damage_params_from_config(m.damage);
+    p.damage = m.damage;  // the model's own parameters (the flaw draw stays with the scene)
     p.stress_diffusion = Real(m.stress_diffusion);
     // Jaky's (1944) K0 = 1 - sin phi for a granular material (Feng et al.
     // 2021); other solids get no geostatic correction of the deviator

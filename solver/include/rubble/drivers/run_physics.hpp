@@ -26,10 +26,10 @@ Features features_of_scene(const Scene& scene);
 // kernel's default when it is 0.
 double smoothing_factor(const SimulationConfig& sim);
 
-// The device-ready parameters of a validated material's parts.
+// The device-ready parameters of a validated material's parts (the scene
+// holds porosity's and damage's own; plasticity's constants are derived).
 EosParams eos_params_from_material(const MaterialConfig& m);
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
-DamageParams damage_params_from_config(const DamageConfig& c);
 
 // One entry per scene material, in material_id order.
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene);

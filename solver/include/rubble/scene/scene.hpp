@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rubble/core/real.hpp"
+#include "rubble/physics/damage.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/gravity.hpp"
 #include "rubble/physics/kernel_type.hpp"
@@ -108,17 +109,14 @@ struct PlasticityConfig {
   DpConeFit cone = DpConeFit::PlaneStrain;
 };
 
-// Tensile damage of a solid (Grady & Kipp 1980; Benz & Asphaug 1994, 1995;
-// physics/damage.hpp): damage = { model = "grady_kipp", weibull_k, weibull_m, ... }.
-struct DamageConfig {
-  bool enabled = false;
-  double weibull_k = 0;     // [m^-3] n(eps) = k eps^m flaws per unit volume (> 0)
-  double weibull_m = 0;     // [1] (> 0)
-  double crack_speed = 0.4; // crack growth speed / longitudinal sound speed, in (0, 1]
-  bool deviatoric = true;   // damage reduces the deviatoric stress too (not only tension)
+// Tensile damage of a solid (Grady & Kipp 1980; Benz & Asphaug 1994, 1995):
+// damage = { model = "grady_kipp", weibull_k, weibull_m, ... }. The model's
+// own parameters (DamageParams, physics/damage.hpp: weibull_k > 0 [m^-3],
+// weibull_m > 0, crack_speed in (0, 1], deviatoric, capped), and the flaw
+// draw of the initial conditions (scene/flaws.hpp).
+struct DamageConfig : DamageParams {
   std::int64_t seed = 1;    // of the flaw draw (>= 0); each body mixes in its index
   std::int32_t min_flaws_per_particle = 1;  // the draw goes on until every particle has this many
-  bool capped = true;       // cap = "active_fraction": D <= n_act,max/n_f (BA95); "none": D <= 1
 };
 
 struct MaterialConfig {
