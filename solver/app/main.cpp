@@ -162,7 +162,21 @@ int run_command(const RunArgs& args) {
   rubble::install_stop_signal_handlers();
   const rubble::FinalState final_state = rubble::run_scene(scene, options);
 
+  // --timings: where the wall time went, on every run that returns (a
+  // finished one, and one stopped by a signal or --max-wall-time)
+  const auto print_timings = [&] {
+    if (!args.timings) return;
+    std::printf("rubble: where the time went (wall seconds, share of %.3g s):\n", final_state.wall_seconds);
+    for (const auto& [phase, seconds] : final_state.phase_seconds)
+      std::printf("  %-40s %10.3f  %5.1f %%\n", phase.c_str(), seconds, 100 * seconds / final_state.wall_seconds);
+    if (final_state.neighbour_searches >= 0)
+      std::printf("  neighbour searches: %lld in %lld evaluations\n",
+                  static_cast<long long>(final_state.neighbour_searches),
+                  static_cast<long long>(final_state.particle_evaluations / std::max<std::size_t>(1, final_state.m.size())));
+    std::fflush(stdout);
+  };
   if (!final_state.stopped.empty()) {
+    print_timings();
     std::cerr << "rubble: stopped by " << final_state.stopped << " at t = " << final_state.time << " s (step "
               << final_state.steps << "); checkpoint " << final_state.checkpoint << "\n"
               << "rubble: resume with: rubble run --restart " << final_state.checkpoint << "\n";
@@ -171,15 +185,7 @@ int run_command(const RunArgs& args) {
   if (!args.quiet)
     std::cout << "rubble: done: t = " << final_state.time << " s after " << final_state.steps << " steps in "
               << final_state.wall_seconds << " s; output in " << out.string() << "\n";
-  if (args.timings) {
-    std::printf("rubble: where the time went (wall seconds, share of %.3g s):\n", final_state.wall_seconds);
-    for (const auto& [phase, seconds] : final_state.phase_seconds)
-      std::printf("  %-40s %10.3f  %5.1f %%\n", phase.c_str(), seconds, 100 * seconds / final_state.wall_seconds);
-    if (final_state.neighbour_searches >= 0)
-      std::printf("  neighbour searches: %lld in %lld evaluations\n",
-                  static_cast<long long>(final_state.neighbour_searches),
-                  static_cast<long long>(final_state.particle_evaluations / std::max<std::size_t>(1, final_state.m.size())));
-  }
+  print_timings();
   return 0;
 }
 

@@ -353,6 +353,16 @@ TEST_F(Cli, MaxWallTimeStopsBeforeTheLimit) {
   }
 }
 
+// --timings is printed by a run that stops early too (issue #50 item 6):
+// here by --max-wall-time, exit code 4.
+TEST_F(Cli, TimingsPrintedWhenStopped) {
+  write_scene("long.toml", long_scene());
+  const Result r = rubble("run long.toml --quiet --timings --out stopped --max-wall-time 1");
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.out.find("rubble: where the time went"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  time-step limit "), std::string::npos) << r.out;
+}
+
 // Resuming into the run's own directory would overwrite snapshots written
 // after the restart point: refused, naming the file; the new-directory
 // form works. SCENE and --restart together are a usage error.
