@@ -28,7 +28,6 @@ class HostLoops {
 
   std::size_t size() const { return ps_.n; }
   StoreView<D> view() const { return ps_.view(); }
-  ParticleStore<D>& store() const { return ps_; }
 
   // f(i) for every i < n: a particle's own work, which costs about the same
   // for every particle (static schedule; serial below 4097 particles, where

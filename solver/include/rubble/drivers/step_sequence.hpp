@@ -263,7 +263,6 @@ class StepSequence {
   // matrix was ill-conditioned and the identity was used instead.
   std::int64_t correction_fallbacks() const { return be_.read_count(fallbacks_); }
   const RhsPhaseSeconds& phase_seconds() const { return phases_; }
-  const Features& features() const { return on_; }
 
   // Frees what only the steps need (the run is over).
   void release_work_memory() {
