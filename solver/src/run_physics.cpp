@@ -63,6 +63,9 @@ EosParams eos_params_from_material(const MaterialConfig& m) {
 PlasticityParams plasticity_params_from_config(const PlasticityConfig& c) {
   switch (c.model) {  // no default: a new model is a compiler warning here
     case PlasticityModel::VonMises: return von_mises_params(Real(c.yield_stress));
+    case PlasticityModel::Collins:
+      return collins_params(Real(c.cohesion), Real(c.friction_intact), Real(c.strength_limit),
+                            Real(c.cohesion_damaged), Real(c.friction_damaged), Real(c.melt_energy));
     case PlasticityModel::DruckerPrager:
       return drucker_prager_params(Real(c.friction_angle), Real(c.cohesion), Real(c.dilatancy_angle), c.cone);
     case PlasticityModel::None: break;

@@ -835,13 +835,41 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
 void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, MaterialConfig& m) {
   PlasticityConfig& c = m.plasticity;
   const auto model = string(q, "model", qp);
-  if (!model) fail(sub(qp, "model"), "missing required key (\"von_mises\" or \"drucker_prager\")");
+  if (!model) fail(sub(qp, "model"), "missing required key (\"von_mises\", \"drucker_prager\" or \"collins\")");
   c.model = choice(q, "model", qp, PlasticityModel::None,
-                   {{"von_mises", PlasticityModel::VonMises}, {"drucker_prager", PlasticityModel::DruckerPrager}});
+                   {{"von_mises", PlasticityModel::VonMises},
+                    {"drucker_prager", PlasticityModel::DruckerPrager},
+                    {"collins", PlasticityModel::Collins}});
   if (c.model == PlasticityModel::VonMises) {
     check_keys(q, qp, {"model", "yield_stress"});
     c.yield_stress = required_number(q, "yield_stress", qp, "the von Mises yield stress Y [Pa]");
     require(c.yield_stress > 0, q, "yield_stress", qp, c.yield_stress, "> 0");
+  } else if (c.model == PlasticityModel::Collins) {
+    // Collins, Melosh & Ivanov 2004 (physics/plasticity.hpp: collins_yield_strength)
+    check_keys(q, qp,
+               {"model", "cohesion", "friction_intact", "strength_limit", "cohesion_damaged", "friction_damaged",
+                "melt_energy"});
+    c.cohesion = required_number(q, "cohesion", qp, "the intact strength Y_0 at zero pressure [Pa]");
+    require(c.cohesion >= 0, q, "cohesion", qp, c.cohesion, ">= 0");
+    c.friction_intact = required_number(q, "friction_intact", qp, "the intact friction coefficient mu_i");
+    require(c.friction_intact >= 0, q, "friction_intact", qp, c.friction_intact, ">= 0");
+    c.strength_limit =
+        required_number(q, "strength_limit", qp, "the limiting strength Y_M of intact rock at high pressure [Pa]");
+    require(c.strength_limit > c.cohesion, q, "strength_limit", qp, c.strength_limit,
+            "> cohesion = " + fmt(c.cohesion) + " (the Lundborg curve rises from Y_0 to Y_M)");
+    c.friction_damaged = required_number(q, "friction_damaged", qp, "the damaged friction coefficient mu_d");
+    require(c.friction_damaged >= 0, q, "friction_damaged", qp, c.friction_damaged, ">= 0");
+    if (auto x = number(q, "cohesion_damaged", qp)) {
+      require(*x >= 0 && *x <= c.cohesion, q, "cohesion_damaged", qp, *x,
+              "in [0, cohesion = " + fmt(c.cohesion) + "] (damaged rock is no stronger than intact rock)");
+      c.cohesion_damaged = *x;
+    }
+    if (auto x = number(q, "melt_energy", qp)) {
+      require(*x > 0, q, "melt_energy", qp, *x, "> 0 [J/kg] (leave it out for no thermal softening)");
+      c.melt_energy = *x;
+    }
+    if (c.cohesion == 0 && c.friction_intact == 0)
+      fail(sub(qp, "cohesion"), "is 0 with friction_intact = 0: the material would have no strength at all");
   } else {
     check_keys(q, qp, {"model", "friction_angle", "cohesion", "dilatancy_angle", "cone"});
     c.friction_angle = required_number(q, "friction_angle", qp, "the friction angle phi [degrees]");
@@ -866,7 +894,7 @@ void SceneReader::read_plasticity(const toml::table& q, const std::string& qp, M
 }
 
 // damage = { model = "grady_kipp", weibull_k, weibull_m, crack_speed, deviatoric, seed,
-//            min_flaws_per_particle, cap }
+//            min_flaws_per_particle, cap, crack_length }
 // (issue #18; Benz & Asphaug 1994, 1995; docs/scene.md).
 void SceneReader::read_damage(const toml::table& q, const std::string& qp, MaterialConfig& m) {
   DamageConfig& c = m.damage;
@@ -874,7 +902,8 @@ void SceneReader::read_damage(const toml::table& q, const std::string& qp, Mater
   if (!model) fail(sub(qp, "model"), "missing required key (the damage model; \"grady_kipp\")");
   choice(q, "model", qp, 0, {{"grady_kipp", 0}});
   check_keys(q, qp,
-             {"model", "weibull_k", "weibull_m", "crack_speed", "deviatoric", "seed", "min_flaws_per_particle", "cap"});
+             {"model", "weibull_k", "weibull_m", "crack_speed", "deviatoric", "seed", "min_flaws_per_particle", "cap",
+              "crack_length"});
   c.enabled = true;
   c.weibull_k = required_number(q, "weibull_k", qp, "the Weibull coefficient k [m^-3] of n(eps) = k eps^m");
   require(c.weibull_k > 0, q, "weibull_k", qp, c.weibull_k, "> 0 [m^-3]");
@@ -885,7 +914,19 @@ void SceneReader::read_damage(const toml::table& q, const std::string& qp, Mater
             "in (0, 1] (the crack speed as a fraction of the longitudinal sound speed; 0.4 in Benz & Asphaug 1994)");
     c.crack_speed = *x;
   }
-  if (auto b = boolean(q, "deviatoric", qp)) c.deviatoric = *b;
+  // Collins strength weakens damaged rock through its yield surface (Y falls
+  // from Y_i to Y_d as D grows); scaling the deviator by 1 - D as well would
+  // count the damage twice (miluphcuda refuses DAMAGE_ACTS_ON_S with it).
+  const bool collins = m.plasticity.model == PlasticityModel::Collins;
+  c.deviatoric = !collins;
+  if (auto b = boolean(q, "deviatoric", qp)) {
+    if (*b && collins)
+      fail(sub(qp, "deviatoric"),
+           "is true, but the material's plasticity is \"collins\", whose yield surface already weakens damaged "
+           "rock (Collins et al. 2004); leave deviatoric out (it defaults to false there)",
+           q.get("deviatoric"));
+    c.deviatoric = *b;
+  }
   if (auto n = integer(q, "seed", qp)) {
     if (*n < 0) fail(sub(qp, "seed"), "is " + std::to_string(*n) + ", must be >= 0", q.get("seed"));
     c.seed = *n;
@@ -901,6 +942,9 @@ void SceneReader::read_damage(const toml::table& q, const std::string& qp, Mater
     c.min_flaws_per_particle = std::int32_t(*n);
   }
   c.capped = choice(q, "cap", qp, true, {{"active_fraction", true}, {"none", false}});
+  c.crack_length = choice(q, "crack_length", qp, CrackLength::ParticleRadius,
+                          {{"particle_radius", CrackLength::ParticleRadius},
+                           {"kernel_support", CrackLength::KernelSupport}});
   if (!(m.shear_modulus > 0))
     fail(qp, "damage acts on solids only; give the material a shear_modulus > 0 (a fluid carries no tension to break)");
 }

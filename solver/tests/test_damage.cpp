@@ -19,6 +19,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numeric>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -27,6 +28,7 @@
 #include "scene_error.hpp"
 #include "rubble/core/error.hpp"
 #include "rubble/drivers/particle_rates.hpp"
+#include "rubble/drivers/run_physics.hpp"
 #include "rubble/io/snapshot.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/flaws.hpp"
@@ -210,15 +212,71 @@ TEST(DamagePhysics, ActiveFlawsExactAtTheEndsAndMonotone) {
   EXPECT_EQ(active_flaws(Real(1), 5, lo, hi, m), 5);
   EXPECT_EQ(active_flaws(Real(1), 0, 0, 0, m), 0);  // no flaws: never active
   EXPECT_EQ(active_flaws(lo, 1, lo, lo, m), 1);     // a single flaw
-  // linear in eps^m between the ends (the flaws' j are spread uniformly)
+  EXPECT_EQ(active_flaws(Real(2e-4), 2, lo, hi, m), 1);  // two flaws: only the weakest below the strongest
+  // linear in eps^m between the ends (the flaws' j are spread uniformly):
+  // the weakest plus half of the 3 interior flaws halfway up
   const Real mid = std::pow(Real(0.5) * (std::pow(lo, m) + std::pow(hi, m)), 1 / m);
-  EXPECT_NEAR(active_flaws(mid, 5, lo, hi, m), 3, 1e-12);
+  EXPECT_NEAR(active_flaws(mid, 5, lo, hi, m), 2.5, 1e-12);
   Real last = 0;
   for (int i = 0; i <= 1000; ++i) {
     const Real n = active_flaws(lo * (1 + Real(3) * Real(i) / 1000), 5, lo, hi, m);
     EXPECT_GE(n, last);
     last = n;
   }
+}
+
+TEST(DamagePhysics, ActiveFlawsIsTheExpectedCountGivenTheEnds) {
+  // A particle's flaws are a uniform random subset of the body's j, and
+  // eps_j^m is proportional to j: in the variable y = eps^m the particle's
+  // n_f activation points are (to the draw's granularity) independent and
+  // uniform. Draw them, keep only the ends as rubble does, and compare the
+  // mean of active_flaws at a fixed strain with the mean true count over the
+  // draws whose ends bracket it (issue #49 item 5: 1 + (n_f - 2) x, not
+  // 1 + (n_f - 1) x). The tolerance is 5 standard errors of the mean.
+  std::mt19937_64 gen(7);
+  std::uniform_real_distribution<double> uni(0, 1);
+  const Real m = 9;
+  for (int n_f : {3, 5, 12}) {
+    const double y = 0.5;  // the strain's eps^m
+    const Real eps = std::pow(Real(y), 1 / m);
+    double sum_true = 0, sum_model = 0, sum_d2 = 0;
+    int used = 0;
+    for (int draw = 0; draw < 40000; ++draw) {
+      std::vector<double> pts(static_cast<std::size_t>(n_f));
+      for (double& q : pts) q = uni(gen);
+      const double lo = *std::min_element(pts.begin(), pts.end()), hi = *std::max_element(pts.begin(), pts.end());
+      if (!(lo <= y && y < hi)) continue;
+      const double truth = double(std::count_if(pts.begin(), pts.end(), [&](double q) { return q <= y; }));
+      const double model =
+          active_flaws(eps, n_f, std::pow(Real(lo), 1 / m), std::pow(Real(hi), 1 / m), m);
+      sum_true += truth, sum_model += model, sum_d2 += (truth - model) * (truth - model);
+      ++used;
+    }
+    ASSERT_GT(used, 1000);
+    const double mean_diff = (sum_true - sum_model) / used;
+    const double se = std::sqrt(sum_d2 / used / used);
+    EXPECT_LT(std::fabs(mean_diff), 5 * se) << "n_f = " << n_f << ": mean true " << sum_true / used
+                                            << ", mean model " << sum_model / used;
+  }
+}
+
+TEST(DamagePhysics, LocalStrainOfTheActingStressOverTheIntactFraction) {
+  // BA94 eq. 9: eps = sigma_t/((1 - D) E), sigma_t of the acting stress.
+  const Real E = 100, Dmg = Real(0.5);
+  Mat<3> S = Mat<3>::zero();
+  S.m[0][0] = 3, S.m[1][1] = -1.5, S.m[2][2] = -1.5;
+  // compression (p = 1 acts in full), deviator scaled by 1 - D: (1.5 - 1)/(0.5 E)
+  EXPECT_DOUBLE_EQ(damage_local_strain<3>((1 - Dmg) * S, damaged_pressure(1.0, Dmg), Dmg, E), 0.01);
+  // ... less than the intact stress's (3 - 1)/E: a compressed damaged particle needs more shear to crack
+  EXPECT_LT(damage_local_strain<3>((1 - Dmg) * S, 1.0, Dmg, E), local_tensile_strain<3>(S, 1.0, E));
+  // tension: (1 - D) p and (1 - D) S over (1 - D): the intact stress's strain
+  EXPECT_DOUBLE_EQ(damage_local_strain<3>((1 - Dmg) * S, damaged_pressure(-1.0, Dmg), Dmg, E),
+                   local_tensile_strain<3>(S, -1.0, E));
+  // a deviator that damage spares enters as S/(1 - D): (3 + 0.5)/(0.5 E)
+  EXPECT_DOUBLE_EQ(damage_local_strain<3>(S, damaged_pressure(-1.0, Dmg), Dmg, E), 0.07);
+  // undamaged: the plain local strain; fully damaged: no further growth
+  EXPECT_DOUBLE_EQ(damage_local_strain<3>(S, -1.0, 0.0, E), local_tensile_strain<3>(S, -1.0, E));
+  EXPECT_EQ(damage_local_strain<3>(S, -1.0, 1.0, E), 0.0);
 }
 
 TEST(DamagePhysics, MaxPrincipalStressCountsTheImpliedComponents) {
@@ -319,6 +377,31 @@ TEST(DamageGrowth, ConstantStrainRateCapAndNeverFalls) {
   EXPECT_EQ(st.active[0], 4);
 }
 
+TEST(DamageGrowth, CrackLengthKernelSupportGrowsOverTheSupportRadius) {
+  // crack_length = "kernel_support" (miluphcuda, Spheral): d delta/dt =
+  // n_act c_g / H with H the particle's support radius, in place of R_s.
+  const Real K = Real(2e10), mu = Real(1e10), rho0 = 2700;
+  MaterialParams mat = brittle(K, mu, rho0, 9);
+  OneParticle st;
+  RhsContext<3> c;
+  c.s = st.view();
+  c.mat = &mat;
+  st.m[0] = Real(2.7e-3);
+  st.rho[0] = rho0 * Real(1 - 3e-4);  // p = -6e6 Pa
+  st.h[0] = Real(0.031);
+  const Real eps = Real(6e6) / youngs_modulus(st.rho[0] * K / rho0, mu);
+  st.flaws[0] = 4;
+  st.eps_min[0] = eps * Real(0.5);
+  st.eps_max[0] = eps * Real(2);
+  eos_particle<3>(c, 0);
+  const Real radius_rate = damage_rate_particle<3>(c, 0);
+  mat.damage.crack_length = CrackLength::KernelSupport;
+  const Real support_rate = damage_rate_particle<3>(c, 0);
+  const Real R = std::cbrt(Real(3) * (st.m[0] / st.rho[0]) / (Real(4) * Real(kPi)));
+  ASSERT_GT(radius_rate, 0);
+  EXPECT_NEAR(support_rate / radius_rate, R / st.h[0], 1e-12);
+}
+
 TEST(DamageGrowth, WithoutTheCapAParticleBreaksOnItsFirstFlaws) {
   // cap = "none": the same particle as above grows at n_act c_g / R_s past
   // (n_act/n_f)^(1/3) up to 1, with only some of its flaws active; the cap
@@ -362,6 +445,38 @@ TEST(DamageGrowth, WithoutTheCapAParticleBreaksOnItsFirstFlaws) {
   EXPECT_NEAR(t, 1 / rate, kDamageStepChange / rate * (1 + 1e-9));
   EXPECT_NEAR(st.active[0], n_act, 1e-12);  // with only n_act < n_f flaws active
   EXPECT_EQ(damage_rate_particle<3>(c, 0), 0);  // at 1: no growth
+}
+
+TEST(DamagedStress, CourantStepUsesTheShearModulusThatActs) {
+  // Issue #49 item 6: the Courant signal speed is sqrt(c^2 + 4 (1 - D) mu/(3 rho)):
+  // a fully damaged particle (deviator acting as (1 - D) S = 0) steps at its
+  // sound speed, an intact one at the longitudinal speed; with damage that
+  // spares the deviator the full modulus stays.
+  const Real K = Real(2e10), mu = Real(3e10), rho0 = 2700;
+  MaterialParams mat = brittle(K, mu, rho0, 9);
+  OneParticle st;
+  std::vector<Real> mu_max{0};
+  std::vector<Vec<3>> dvdt{Vec<3>::zero()};
+  RhsContext<3> c;
+  c.s = st.view();
+  c.s.mu_max = mu_max.data(), c.s.dvdt = dvdt.data();
+  c.mat = &mat;
+  c.courant = Real(0.3), c.force_factor = Real(0.25);
+  st.m[0] = Real(2.7e-3), st.rho[0] = rho0, st.h[0] = Real(0.02);
+  eos_particle<3>(c, 0);
+  const Real cs = st.cs[0];
+  const Real hM = monaghan_h<3>(c.kernel, st.h[0]);
+  auto expected = [&](Real mu_acting) {
+    return courant_dt(c.courant, hM, elastic_signal_speed(cs, mu_acting, rho0), mat.av.alpha, mat.av.beta, 0);
+  };
+  EXPECT_DOUBLE_EQ(dt_limit_particle<3>(c, 0), expected(mu));
+  st.damage_root[0] = 1;
+  EXPECT_DOUBLE_EQ(dt_limit_particle<3>(c, 0), expected(0));
+  EXPECT_GT(dt_limit_particle<3>(c, 0) / expected(mu), 1.5);  // c_l/c_s = sqrt(1 + 4 mu/(3 K)) = 2.45
+  st.damage_root[0] = Real(0.5);  // D = 1/8 in 3-D
+  EXPECT_DOUBLE_EQ(dt_limit_particle<3>(c, 0), expected(Real(7) / 8 * mu));
+  mat.damage.deviatoric = false;
+  EXPECT_DOUBLE_EQ(dt_limit_particle<3>(c, 0), expected(mu));
 }
 
 TEST(DamagedStress, FullyDamagedParticlesTransmitNoTension) {
@@ -453,6 +568,13 @@ TEST(DamageScene, KeysDefaultsAndErrors) {
   EXPECT_EQ(d.seed, 1);
   EXPECT_EQ(d.min_flaws_per_particle, 1);  // Benz & Asphaug 1995: every particle at least one
   EXPECT_TRUE(d.capped);                   // Benz & Asphaug 1995: D <= n_act/n_f
+  EXPECT_EQ(d.crack_length, CrackLength::ParticleRadius);  // Benz & Asphaug 1995: the particle's radius
+  EXPECT_EQ(parse_scene(stretched_block("damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, "
+                                        "crack_length = \"kernel_support\" }"),
+                        "t.toml")
+                .materials[0]
+                .damage.crack_length,
+            CrackLength::KernelSupport);
   const Scene t = parse_scene(
       stretched_block("damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, crack_speed = 0.3, "
                       "deviatoric = false, seed = 99, min_flaws_per_particle = 40, cap = \"none\" }"),
@@ -489,6 +611,8 @@ TEST(DamageScene, KeysDefaultsAndErrors) {
        "materials.rock.damage.cap"},
       {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, cap = false }",
        "materials.rock.damage.cap"},
+      {"damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, crack_length = \"h\" }",
+       "materials.rock.damage.crack_length"},
   };
   for (const auto& [table, key] : bad) {
     const std::string msg = parse_error(stretched_block(table));
@@ -499,6 +623,55 @@ TEST(DamageScene, KeysDefaultsAndErrors) {
   std::string fluid = stretched_block(kDamage);
   fluid.replace(fluid.find("shear_modulus = 0.5"), 19, "");
   EXPECT_NE(parse_error(fluid).find("materials.rock.damage"), std::string::npos) << parse_error(fluid);
+}
+
+TEST(DamageScene, CollinsStrengthKeysAndItsDamageActsThroughTheYieldSurface) {
+  const std::string collins =
+      "plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 1.0, "
+      "friction_damaged = 0.6 }\n";
+  const Scene s = parse_scene(stretched_block(collins + kDamage), "t.toml");
+  const PlasticityConfig& pc = s.materials[0].plasticity;
+  EXPECT_EQ(pc.model, PlasticityModel::Collins);
+  EXPECT_EQ(pc.cohesion, 0.01);
+  EXPECT_EQ(pc.friction_intact, 1.4);
+  EXPECT_EQ(pc.strength_limit, 1.0);
+  EXPECT_EQ(pc.friction_damaged, 0.6);
+  EXPECT_EQ(pc.cohesion_damaged, 0.0);  // default: a cohesionless Coulomb law (Collins et al. 2004)
+  EXPECT_EQ(pc.melt_energy, 0.0);       // default: no thermal softening
+  // damage weakens Collins rock through Y(p, D), not by scaling the deviator
+  EXPECT_FALSE(s.materials[0].damage.deviatoric);
+  const MaterialParams mp = material_params_from_scene(s)[0];
+  EXPECT_EQ(mp.plasticity.model, PlasticityModel::Collins);
+  EXPECT_EQ(mp.plasticity.strength_limit, 1.0);
+  EXPECT_EQ(damaged_deviatoric_factor(mp.damage, 1.0), 1.0);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"plasticity = { model = \"collins\", friction_intact = 1.4, strength_limit = 1.0, friction_damaged = 0.6 }",
+       "materials.rock.plasticity.cohesion"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 0.001, "
+       "friction_damaged = 0.6 }",
+       "materials.rock.plasticity.strength_limit"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = -1.0, strength_limit = 1.0, "
+       "friction_damaged = 0.6 }",
+       "materials.rock.plasticity.friction_intact"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 1.0 }",
+       "materials.rock.plasticity.friction_damaged"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 1.0, "
+       "friction_damaged = 0.6, cohesion_damaged = 0.02 }",
+       "materials.rock.plasticity.cohesion_damaged"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 1.0, "
+       "friction_damaged = 0.6, melt_energy = 0.0 }",
+       "materials.rock.plasticity.melt_energy"},
+      {"plasticity = { model = \"collins\", cohesion = 0.01, friction_intact = 1.4, strength_limit = 1.0, "
+       "friction_damaged = 0.6, yield_stress = 1.0 }",
+       "materials.rock.plasticity"},
+      {collins + "damage = { model = \"grady_kipp\", weibull_k = 1e20, weibull_m = 6.0, deviatoric = true }",
+       "materials.rock.damage.deviatoric"},
+  };
+  for (const auto& [table, key] : bad) {
+    const std::string msg = parse_error(stretched_block(table));
+    EXPECT_NE(msg.find("t.toml"), std::string::npos) << table << ": " << msg;
+    EXPECT_NE(msg.find(key), std::string::npos) << table << ": " << msg;
+  }
 }
 
 TEST(DamageRun, FieldsOnlyWithDamageAndAStretchedBlockBreaks) {
@@ -570,6 +743,33 @@ TEST(DamageLibrary, BrittleBasaltAndIceCarryTheirWeibullConstants) {
     EXPECT_EQ(m.tillotson.E0, base.tillotson.E0) << w.name;
     EXPECT_EQ(m.tillotson.alpha, base.tillotson.alpha) << w.name;
   }
+}
+
+TEST(DamageLibrary, CollinsRocksCarryTheirStrengthAndDamageActsThroughIt) {
+  // the values of the files' sources (reference_data/materials/*_collins.toml)
+  const MaterialConfig b = load_material("basalt_collins"), basalt = load_material("basalt_brittle");
+  EXPECT_EQ(b.plasticity.model, PlasticityModel::Collins);
+  EXPECT_EQ(b.plasticity.cohesion, 2.0e7);  // SALEc example/sup_material.inp basalt_: YINT0
+  EXPECT_EQ(b.plasticity.friction_intact, 1.4);
+  EXPECT_EQ(b.plasticity.strength_limit, 3.5e9);
+  EXPECT_EQ(b.plasticity.cohesion_damaged, 1.0e4);
+  EXPECT_EQ(b.plasticity.friction_damaged, 0.6);
+  EXPECT_EQ(b.plasticity.melt_energy, 3.4e6);  // miluphcuda basalt.plasticity.cfg
+  EXPECT_TRUE(b.damage.enabled);
+  EXPECT_FALSE(b.damage.deviatoric);  // damage acts through the yield surface
+  EXPECT_EQ(b.damage.weibull_k, basalt.damage.weibull_k);
+  EXPECT_EQ(b.damage.weibull_m, basalt.damage.weibull_m);
+  EXPECT_EQ(b.shear_modulus, basalt.shear_modulus);
+  EXPECT_EQ(b.tillotson.A, basalt.tillotson.A);
+  const MaterialConfig g = load_material("granite_collins"), granite = load_material("granite");
+  EXPECT_EQ(g.plasticity.model, PlasticityModel::Collins);
+  EXPECT_EQ(g.plasticity.cohesion, 9.0e7);  // miluphcuda granite.plasticity.cfg
+  EXPECT_EQ(g.plasticity.strength_limit, 1.5e9);
+  EXPECT_EQ(g.plasticity.friction_intact, 2.0);
+  EXPECT_EQ(g.plasticity.friction_damaged, 0.8);
+  EXPECT_EQ(g.shear_modulus, 2.7e10);  // miluphcuda Granite.cfg
+  EXPECT_FALSE(g.damage.enabled);
+  EXPECT_EQ(g.tillotson.A, granite.tillotson.A);
 }
 
 TEST(VelocityGradient, LinearInitialVelocityAndErrors) {

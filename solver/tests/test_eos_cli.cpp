@@ -160,7 +160,7 @@ TEST_F(eos_cli, LogSpacingOverridesAndMaterialFiles) {
 TEST_F(eos_cli, UnknownMaterialIsAClearError) {
   expect_usage_error("eos basalts --rho 1:2:2 --u 0:1:2", "unknown material");
   expect_usage_error("eos basalts --rho 1:2:2 --u 0:1:2", "did you mean 'basalt'");
-  expect_usage_error("eos basalts --rho 1:2:2 --u 0:1:2", "aluminium, aluminium_bars, basalt, basalt_brittle, granite, ice, ice_brittle, iron, nylon, phobos_regolith, porous_aluminium, porous_basalt, pumice, rubber, water");
+  expect_usage_error("eos basalts --rho 1:2:2 --u 0:1:2", "aluminium, aluminium_bars, basalt, basalt_brittle, basalt_collins, granite, granite_collins, ice, ice_brittle, iron, nylon, phobos_regolith, porous_aluminium, porous_basalt, pumice, rubber, water");
   expect_usage_error("eos nothere.toml --rho 1:2:2 --u 0:1:2", "no such material file");
   expect_usage_error("eos basalt --rho 1:2:2 --u 0:1:2 --set tillotson.E_cv=1", "tillotson.E_cv");
 }

@@ -47,7 +47,7 @@ Mat<D> block(const double (&L3)[3][3]) {
 // 1e-12 of this (a return costs a few roundings of O(eps) = 2e-16 each, so
 // 1e-12 is ~1000x margin, while any formula error is O(1) of the scale).
 double f_scale(const PlasticityParams& pp, double sj2, double p) {
-  return std::max({pp.k_c, pp.yield_stress, std::fabs(3 * pp.alpha_phi * p), sj2, 1.0});
+  return std::max({pp.k_c, pp.yield_stress, pp.strength_limit, std::fabs(3 * pp.alpha_phi * p), sj2, 1.0});
 }
 
 template <int D>
@@ -56,6 +56,7 @@ struct Element {
   Mat<D> S = Mat<D>::zero();
   double p = 0;
   double G = kG, K = kK;
+  double damage = 0, u = 0;  // enter the Collins surface only
   // diagnostics of the last step
   double f_trial = 0;
   PlasticReturn<D> last{};
@@ -64,15 +65,15 @@ struct Element {
   bool step(const Mat<D>& L, double dt) {
     S += dt * deviatoric_stress_rate<D>(S, L, G);
     p += -dt * K * trace(strain_rate(L));
-    f_trial = yield_function<D>(pp, S, p);
+    f_trial = yield_function<D>(pp, S, p, damage, u);
     const Mat<D> S_tr = S;
     const double p_tr = p;
-    last = plastic_return<D>(pp, S, p, G, K);
+    last = plastic_return<D>(pp, S, p, G, K, damage, u);
     S = last.S;
     p = last.p;
     return !(S_tr == S) || p_tr != p;
   }
-  double f() const { return yield_function<D>(pp, S, p); }
+  double f() const { return yield_function<D>(pp, S, p, damage, u); }
   double sj2() const { return std::sqrt(deviatoric_j2(S)); }
 };
 
@@ -754,4 +755,99 @@ TEST(PlasticReturn, NoneIsIdentity) {
   EXPECT_EQ(r.deps_p, 0.0);
   EXPECT_EQ(r.deps_v, 0.0);
   EXPECT_LT(yield_function<3>(pp, S, -1e12), 0);
+}
+
+// ---------------------------------------------------------------------------
+// Collins, Melosh & Ivanov 2004: strength of intact and damaged rock
+// (issue #49 item 1). Parameters: the basalt of an iSALE-format input
+// (SALEc-2D-public example/sup_material.inp: Y_0 = 20 MPa, mu_i = 1.4,
+// Y_M = 3.5 GPa, Y_d0 = 10 kPa, mu_d = 0.6); the checks are of the formulas,
+// any rock would do.
+
+namespace {
+PlasticityParams collins_basalt(double melt_energy = 0) {
+  return collins_params(2.0e7, 1.4, 3.5e9, 1.0e4, 0.6, melt_energy);
+}
+// Lundborg's curve written out independently of plasticity.hpp.
+double lundborg(double Y0, double mu, double YM, double p) { return Y0 + mu * p * (YM - Y0) / (YM - Y0 + mu * p); }
+}  // namespace
+
+TEST(Collins, IntactAndDamagedCurvesTheirLimitsAndTheInterpolationInD) {
+  const PlasticityParams pp = collins_basalt();
+  // p = 0: the cohesions
+  EXPECT_DOUBLE_EQ(collins_yield_strength(pp, 0, 0, 0), 2.0e7);
+  EXPECT_DOUBLE_EQ(collins_yield_strength(pp, 0, 1, 0), 1.0e4);
+  for (double p : {1e5, 1e7, 3e8, 1e9, 5e9, 3e10}) {
+    const double yi = lundborg(2.0e7, 1.4, 3.5e9, p);
+    const double yd = std::min(1.0e4 + 0.6 * p, yi);
+    EXPECT_NEAR(collins_yield_strength(pp, p, 0, 0), yi, 1e-12 * yi) << p;
+    EXPECT_NEAR(collins_yield_strength(pp, p, 1, 0), yd, 1e-12 * yi) << p;
+    for (double D : {0.25, 0.5, 0.9})  // linear in D between the two branches
+      EXPECT_NEAR(collins_yield_strength(pp, p, D, 0), (1 - D) * yi + D * yd, 1e-12 * yi) << p << " " << D;
+    EXPECT_LE(yd, yi);
+  }
+  // p -> infinity: Y_i -> Y_M and the damaged branch meets the intact one
+  const double big = 1e16;
+  EXPECT_NEAR(collins_yield_strength(pp, big, 0, 0), 3.5e9, 1e-5 * 3.5e9);
+  EXPECT_DOUBLE_EQ(collins_yield_strength(pp, big, 1, 0), collins_yield_strength(pp, big, 0, 0));
+  // monotone in p, continuous through p = 0
+  double last = -1;
+  for (double p = -5e7; p < 1e10; p += 1e6) {
+    const double y = collins_yield_strength(pp, p, 0.3, 0);
+    EXPECT_GE(y, last) << p;
+    last = y;
+  }
+  EXPECT_NEAR(collins_yield_strength(pp, -1.0, 0, 0), 2.0e7, 2.0);
+  // tension: each curve reaches 0 at its own zero and stays 0 (no negative strength)
+  const double p_i0 = -2.0e7 * (3.5e9 - 2.0e7) / (1.4 * 3.5e9), p_d0 = -1.0e4 / 0.6;
+  EXPECT_NEAR(collins_yield_strength(pp, 0.999 * p_i0, 0, 0), lundborg(2.0e7, 1.4, 3.5e9, 0.999 * p_i0), 1e-3);
+  EXPECT_GT(collins_yield_strength(pp, 0.999 * p_i0, 0, 0), 0);
+  EXPECT_EQ(collins_yield_strength(pp, 1.001 * p_i0, 0, 0), 0);
+  EXPECT_EQ(collins_yield_strength(pp, -1e12, 0, 0), 0);
+  EXPECT_GT(collins_yield_strength(pp, 0.999 * p_d0, 1, 0), 0);
+  EXPECT_EQ(collins_yield_strength(pp, 1.001 * p_d0, 1, 0), 0);
+  // without friction the intact strength is Y_0 at every pressure
+  EXPECT_EQ(collins_yield_strength(collins_params(1e6, 0, 1e9, 0, 0, 0), 5e8, 0, 0), 1e6);
+}
+
+TEST(Collins, ThermalSofteningTowardsTheMeltEnergy) {
+  // miluphcuda's COLLINS_PLASTICITY_INCLUDE_MELT_ENERGY form: Y_i (1 - u/u_melt)
+  const PlasticityParams pp = collins_basalt(3.4e6);
+  const double p = 2e8, yi = lundborg(2.0e7, 1.4, 3.5e9, p);
+  EXPECT_DOUBLE_EQ(collins_yield_strength(pp, p, 0, 0), yi);
+  EXPECT_NEAR(collins_yield_strength(pp, p, 0, 0.85e6), 0.75 * yi, 1e-9 * yi);
+  EXPECT_EQ(collins_yield_strength(pp, p, 0, 3.4e6), 0);
+  EXPECT_EQ(collins_yield_strength(pp, p, 0.5, 5e6), 0);
+  // the damaged branch is capped by the softened intact one
+  EXPECT_LE(collins_yield_strength(pp, 1e10, 1, 3.0e6), collins_yield_strength(pp, 1e10, 0, 3.0e6));
+}
+
+// A homogeneous element sheared at fixed pressure (simple shear, tr L = 0;
+// sqrt(J2) = 2 G sin(gamma/2), see check_simple_shear_onset) yields at
+// sqrt(J2) = Y(p0, D) of its damage, intact and damaged, and then flows on
+// that surface with p unchanged.
+template <int D>
+void check_collins_shear(double p0, double damage) {
+  const double G = 2.27e10, K = 2.67e10, gdot = 1.0, dt = 1.0e-7 * 1.0000007;
+  const PlasticityParams pp = collins_basalt();
+  const double Y = collins_yield_strength(pp, p0, damage, 0);
+  const double gamma_y = 2 * std::asin(Y / (2 * G));
+  const double L3[3][3] = {{0, gdot, 0}, {0, 0, 0}, {0, 0, 0}};
+  Element<D> el;
+  el.pp = pp, el.G = G, el.K = K, el.p = p0, el.damage = damage;
+  const int n = run_to_onset<D>(el, block<D>(L3), dt, 10000000);
+  expect_onset_step(n, gamma_y / gdot, dt);
+  for (int k = 0; k < 200; ++k) el.step(block<D>(L3), dt);
+  EXPECT_NEAR(el.sj2(), Y, 1e-12 * Y) << "p0 " << p0 << " D " << damage;
+  EXPECT_EQ(el.p, p0);
+  EXPECT_GT(el.last.deps_p, 0);
+  EXPECT_EQ(el.last.deps_v, 0);  // no plastic volume change
+}
+TEST(Collins, ShearedElementYieldsOnTheIntactDamagedAndMixedSurfaces2D) {
+  for (double p0 : {0.0, 1e8, 1e9})
+    for (double D : {0.0, 0.5, 1.0}) check_collins_shear<2>(p0, D);
+}
+TEST(Collins, ShearedElementYieldsOnTheIntactDamagedAndMixedSurfaces3D) {
+  for (double p0 : {0.0, 1e8, 1e9})
+    for (double D : {0.0, 0.5, 1.0}) check_collins_shear<3>(p0, D);
 }

@@ -329,6 +329,7 @@ ForcedRun forced_run(const ForcedCase& c, const Forcing& f, double dt) {
     // Heun (rk2_adaptive's accepted combination) on (rho, u, alpha), alpha
     // kept >= 1, then the solver's end of step (porosity_end_step_particle):
     // the state returned to the loading envelope from the step's start value
+    // (porosity_return_bound: alpha_e while the state is virgin elastic)
     const double k1 = rate(t, rho_num, u_num, alpha);
     const double a1 = double(integrated_alpha(Real(alpha), Real(dt), Real(k1)));
     const double rho1 = rho_num + dt * f.drho(t), u1 = u_num + dt * f.du(t);
@@ -336,7 +337,8 @@ ForcedRun forced_run(const ForcedCase& c, const Forcing& f, double dt) {
     double next = double(integrated_alpha(Real(alpha), Real(0.5 * dt), Real(k1 + k2)));
     rho_num += 0.5 * dt * (f.drho(t) + f.drho(t + dt));
     u_num += 0.5 * dt * (f.du(t) + f.du(t + dt));
-    next = double(porous_alpha_on_loading_curve(c.matrix, q, Real(rho_num), Real(u_num), Real(alpha)));
+    next = double(porous_alpha_on_loading_curve(c.matrix, q, Real(rho_num), Real(u_num),
+                                                porosity_return_bound(c.matrix, q, Real(alpha))));
     r.max_step_fraction = std::max(r.max_step_fraction, std::fabs(next - alpha) / alpha);
     if (k1 == 0 && k2 != 0) ++r.stalled_k1;
     if (f.drho(t) < 0 && f.drho(t + dt) < 0) {

@@ -177,32 +177,6 @@ RUBBLE_HD_INLINE bool state_evolves(const StoreView<D>& s, std::uint32_t a) {
   return !s.boundary || s.boundary[a] == kFreeParticle || s.boundary[a] == kBoundaryEvolving;
 }
 
-// Extrapolated wall particle a (kBoundaryExtrapolated): p, S, rho and c_s
-// from its free neighbours (physics/wall_extrapolation.hpp), with the body
-// force as the wall's hydrostatic gradient (self-gravity is not included).
-// Free and other boundary particles are left alone, so it may run over all
-// particles at once: it reads only free particles and writes only walls.
-// A wall particle without free neighbours keeps its last state.
-template <int D, class Each>
-RUBBLE_HD_INLINE void wall_extrapolation_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
-  const StoreView<D>& s = c.s;
-  if (!s.boundary || s.boundary[a] != kBoundaryExtrapolated) return;
-  WallSums<D> sum;
-  each([&](std::uint32_t b) {
-    if (s.boundary[b] != kFreeParticle) return;
-    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
-    const Real w = kernel_w<D>(c.kernel, norm(dx), s.h[a]);
-    if (w <= Real(0)) return;
-    wall_sums_add<D>(sum, w, dx, s.p[b], s.rho[b], s.cs[b], s.S ? s.S[b] : Mat<D>::zero());
-  });
-  if (sum.w <= Real(0)) return;
-  const WallState st = wall_state<D>(sum, c.body_force);
-  s.p[a] = st.p;
-  s.rho[a] = st.rho;
-  s.cs[a] = st.cs;
-  if (s.S) s.S[a] = wall_deviator<D>(sum);
-}
-
 // ---- density -------------------------------------------------------------
 
 struct DensitySums {
@@ -269,14 +243,23 @@ RUBBLE_HD_INLINE void h_from_density_particle(const RhsContext<D>& c, std::uint3
   c.s.h[a] = h_from_density<D>(c.hfact, c.s.m[a], c.s.rho[a]);
 }
 
+// The elastic density of particle a: rho exp(eps_v) for a Drucker-Prager
+// material, whose inelastic volume change (cracking, dilatancy) eps_v does
+// not load its equation of state; rho otherwise. What the EOS, and for a
+// porous material the crush curve, d alpha/dt and the end-of-step return,
+// see (one density for all of them; issue #49 item 4b).
+template <int D>
+RUBBLE_HD_INLINE Real elastic_density_particle(const RhsContext<D>& c, std::uint32_t a) {
+  return c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
+}
+
 // Pressure and c_s^2 of particle a's intact material from its equation of
-// state; for a porous material p = p_s(alpha rho, u)/alpha
-// (physics/porosity.hpp). Drucker-Prager materials' inelastic volume change
-// (cracking, dilatancy): the EOS sees the elastic density rho exp(eps_v).
+// state at its elastic density; for a porous material
+// p = p_s(alpha rho, u)/alpha (physics/porosity.hpp).
 template <int D>
 RUBBLE_HD_INLINE EosState intact_eos_particle(const RhsContext<D>& c, std::uint32_t a) {
   const MaterialParams& mat = c.mat[c.s.material_id[a]];
-  const Real rho = c.s.eps_v ? c.s.rho[a] * std::exp(c.s.eps_v[a]) : c.s.rho[a];
+  const Real rho = elastic_density_particle<D>(c, a);
   if (mat.porosity.enabled) {
     const PorousEosState e = porous_eos_evaluate(mat.eos, mat.porosity, rho, c.s.u[a], c.s.alpha[a]);
     return EosState{e.p, e.c2};
@@ -323,23 +306,65 @@ RUBBLE_HD_INLINE Real deviatoric_factor_particle(const RhsContext<D>& c, std::ui
   return dp.enabled ? f * damaged_deviatoric_factor(dp, damage_from_root<D>(c.s.damage_root[a])) : f;
 }
 
+// Extrapolated wall particle a (kBoundaryExtrapolated): p, S, rho and c_s
+// from its free neighbours' acting stress (physics/wall_extrapolation.hpp), with the body
+// force as the wall's hydrostatic gradient (self-gravity is not included).
+// Free and other boundary particles are left alone, so it may run over all
+// particles at once: it reads only free particles and writes only walls.
+// A wall particle without free neighbours keeps its last state.
+template <int D, class Each>
+RUBBLE_HD_INLINE void wall_extrapolation_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
+  const StoreView<D>& s = c.s;
+  if (!s.boundary || s.boundary[a] != kBoundaryExtrapolated) return;
+  WallSums<D> sum;
+  each([&](std::uint32_t b) {
+    if (s.boundary[b] != kFreeParticle) return;
+    const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
+    const Real w = kernel_w<D>(c.kernel, norm(dx), s.h[a]);
+    if (w <= Real(0)) return;
+    // the deviator that ACTS at b (1/alpha porous, 1 - D damaged), as p_b is the acting pressure
+    wall_sums_add<D>(sum, w, dx, s.p[b], s.rho[b], s.cs[b],
+                     s.S ? deviatoric_factor_particle<D>(c, b) * s.S[b] : Mat<D>::zero());
+  });
+  if (sum.w <= Real(0)) return;
+  const WallState st = wall_state<D>(sum, c.body_force);
+  s.p[a] = st.p;
+  s.rho[a] = st.rho;
+  s.cs[a] = st.cs;
+  // stored so that the wall's own factor turns it back into the extrapolated
+  // acting deviator (a wall's factor is > 0: walls take no damage)
+  if (s.S) {
+    const Real f = deviatoric_factor_particle<D>(c, a);
+    s.S[a] = (f > Real(0) ? Real(1) / f : Real(1)) * wall_deviator<D>(sum);
+  }
+}
+
 // d alpha/dt of particle a from the chain rule, given its d rho/dt and
 // du/dt (porosity.hpp: porosity_dalpha_dt); 0 for non-porous materials and
 // frozen boundary particles. Called by the rate passes as soon as the pair
 // sums are done: d rho/dt is the SPH continuity rate, which summation
 // density computes too (hydro.hpp), so porous fluids may use either form.
+// At the elastic density rho exp(eps_v) (elastic_density_particle), whose
+// rate within a step is exp(eps_v) d rho/dt (eps_v changes only at the end
+// of a step).
 template <int D>
 RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32_t a, Real drhodt, Real dudt) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
-  return (mat.porosity.enabled && state_evolves<D>(s, a))
-             ? porosity_dalpha_dt(mat.eos, mat.porosity, s.rho[a], s.u[a], s.alpha[a], drhodt, dudt)
-             : Real(0);
+  if (!mat.porosity.enabled || !state_evolves<D>(s, a)) return Real(0);
+  const Real scale = s.eps_v ? std::exp(s.eps_v[a]) : Real(1);
+  return porosity_dalpha_dt(mat.eos, mat.porosity, scale * s.rho[a], s.u[a], s.alpha[a], scale * drhodt, dudt);
 }
 
 // The plastic return mapping of particle a's deviatoric stress onto its
 // material's yield surface (plasticity.hpp: plastic_return), at the
-// pressure of the last eos_particle. With `accumulate` (once per accepted
+// pressure of the last eos_particle. The return acts on the intact stress
+// -p I + f S (f the porous factor): for a damaged material in tension the
+// intact pressure is recovered from the acting (1 - D) p, and the returned
+// pressure — a Drucker-Prager apex, a dilatant increase — is stored as the
+// acting one again, so damage still carries only (1 - D) of the returned
+// tension (issue #49 item 4c; before, the return saw the damaged pressure
+// and left the undamaged apex tension acting). With `accumulate` (once per accepted
 // step, at its end) the equivalent plastic strain grows by the return's
 // increment; the returns inside an evaluation (stage states the integrator
 // discards) only keep the stress on the surface.
@@ -363,9 +388,13 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
   if (mat.plasticity.model == PlasticityModel::None || !state_evolves<D>(s, a)) return;
   const Real f = intact_deviatoric_factor_particle<D>(c, a);
   const Real K = s.rho[a] * s.cs[a] * s.cs[a];
-  const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], s.p[a], f * mat.shear_modulus, K);
+  const Real dmg = damage_particle<D>(c, a);
+  Real p = s.p[a];  // acting; the intact one differs only in tension
+  if (dmg > Real(0) && p <= Real(0) && mat.plasticity.model != PlasticityModel::VonMises)
+    p = dmg < Real(1) ? p / (Real(1) - dmg) : intact_eos_particle<D>(c, a).p;
+  const PlasticReturn<D> r = plastic_return<D>(mat.plasticity, f * s.S[a], p, f * mat.shear_modulus, K, dmg, s.u[a]);
   s.S[a] = (Real(1) / f) * r.S;
-  s.p[a] = r.p;
+  s.p[a] = dmg > Real(0) ? damaged_pressure(r.p, dmg) : r.p;
   if (accumulate) {
     s.eps_p[a] += r.deps_p;
     if (s.eps_v) s.eps_v[a] = std::fmin(s.eps_v[a] + r.deps_v + r.deps_crack, kMaxInelasticVolume);
@@ -373,36 +402,42 @@ RUBBLE_HD_INLINE void plastic_return_particle(const RhsContext<D>& c, std::uint3
 }
 
 // End of an accepted step: alpha is returned to the loading envelope from
-// its value at the start of the step, alpha = alpha_env(rho, u; <= alpha_start)
-// (porosity.hpp: porous_alpha_on_loading_curve). On loading this puts the
-// state exactly on the envelope at the step's final (rho, u), whether the
-// chain-rule stages overshot it (a step across the kink at p_e, a shock,
-// p beyond p_s) or fell short of it (an explicit stage just below the
-// envelope sees d alpha/dt = 0, which alone would make the scheme first
-// order); on unloading, or below the envelope, alpha_start is kept. So the
-// accepted alpha is min over the path of alpha_env and never rises; the
-// chain rule supplies the stage values, the step control and the rates.
+// its value at the start of the step, alpha = alpha_env(rho, u; <= bound)
+// (porosity.hpp: porous_alpha_on_loading_curve) with bound = alpha_start,
+// or alpha_e for a state on the virgin elastic curve (porosity_return_bound).
+// On loading this puts the state exactly on the envelope at the step's
+// final (rho, u), whether the chain-rule stages overshot it (a step across
+// the kink at p_e, a shock, p beyond p_s) or fell short of it (an explicit
+// stage just below the envelope sees d alpha/dt = 0, which alone would make
+// the scheme first order); on unloading a virgin elastic state goes back up
+// the reversible elastic curve, while a crushed one, or one below the
+// envelope, keeps alpha_start. So a crushed alpha is the min over the path
+// of alpha_env and never rises; the chain rule supplies the stage values,
+// the step control and the rates.
 template <int D>
 RUBBLE_HD_INLINE void porosity_end_step_particle(const RhsContext<D>& c, std::uint32_t a, const Real* alpha_start) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
   if (!mat.porosity.enabled || !state_evolves<D>(s, a)) return;
-  s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, s.rho[a], s.u[a], alpha_start[a]);
+  s.alpha[a] = porous_alpha_on_loading_curve(mat.eos, mat.porosity, elastic_density_particle<D>(c, a), s.u[a],
+                                             porosity_return_bound(mat.eos, mat.porosity, alpha_start[a]));
 }
 
 // ---- tensile damage (per particle, no neighbours; physics/damage.hpp) ----
 
-// What the growth law needs of particle a: the local tensile strain of its
-// intact stress, the flaws active at it and the crack speed over the
-// particle radius.
+// What the growth law needs of particle a: the local tensile strain of the
+// stress that acts, over (1 - D) E (damage.hpp: damage_local_strain), the
+// flaws active at it, the crack speed and the crack-growth length.
 struct DamageDrive {
   Real n_act;   // flaws active at the current strain
   Real c_g;     // crack growth speed [m/s]
   Real radius;  // R_s [m]
 };
 
+// `delta` is the damage root the strain is taken at (the particle's own in
+// the rates; see damage_end_step_particle for the end of a step).
 template <int D>
-RUBBLE_HD_INLINE DamageDrive damage_drive_particle(const RhsContext<D>& c, std::uint32_t a) {
+RUBBLE_HD_INLINE DamageDrive damage_drive_particle(const RhsContext<D>& c, std::uint32_t a, Real delta) {
   const StoreView<D>& s = c.s;
   const MaterialParams& mat = c.mat[s.material_id[a]];
   const EosState e = intact_eos_particle<D>(c, a);
@@ -410,10 +445,14 @@ RUBBLE_HD_INLINE DamageDrive damage_drive_particle(const RhsContext<D>& c, std::
   const Real mu = f * mat.shear_modulus;
   const Real c2 = e.c2 > Real(0) ? e.c2 : Real(0);
   const Real E = youngs_modulus(s.rho[a] * c2, mu);
-  const Real eps = local_tensile_strain<D>(f * s.S[a], e.p, E);
+  const Real dmg = damage_from_root<D>(delta);
+  const Real eps = damage_local_strain<D>(f * damaged_deviatoric_factor(mat.damage, dmg) * s.S[a],
+                                          damaged_pressure(e.p, dmg), dmg, E);
   const Real n_act = active_flaws(eps, s.flaw_count[a], s.flaw_eps_min[a], s.flaw_eps_max[a], mat.damage.weibull_m);
   const Real cl = elastic_signal_speed(std::sqrt(c2), mu, s.rho[a]);
-  return DamageDrive{n_act, mat.damage.crack_speed * cl, particle_radius<D>(s.m[a] / s.rho[a])};
+  const Real radius =
+      mat.damage.crack_length == CrackLength::KernelSupport ? s.h[a] : particle_radius<D>(s.m[a] / s.rho[a]);
+  return DamageDrive{n_act, mat.damage.crack_speed * cl, radius};
 }
 
 // d delta/dt of particle a (0 for materials without damage, walls, and
@@ -422,21 +461,42 @@ template <int D>
 RUBBLE_HD_INLINE Real damage_rate_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   if (!c.mat[s.material_id[a]].damage.enabled || !state_evolves<D>(s, a) || s.flaw_count[a] <= 0) return 0;
-  const DamageDrive d = damage_drive_particle<D>(c, a);
+  const DamageDrive d = damage_drive_particle<D>(c, a, s.damage_root[a]);
   return damage_root_rate<D>(s.damage_root[a], d.n_act, s.flaws_active[a], s.flaw_count[a], d.c_g, d.radius,
                              c.mat[s.material_id[a]].damage.capped);
 }
 
+// The damage limit on particle a's step (damage.hpp: damage_dt_limit) from
+// its rate and its room below the cap of the flaws active now.
+template <int D>
+RUBBLE_HD_INLINE Real damage_dt_limit_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  const Real rate = s.ddamage_root_dt[a];
+  if (!(rate > Real(0))) return Real(1e30);
+  const DamageDrive d = damage_drive_particle<D>(c, a, s.damage_root[a]);
+  const Real n_max = d.n_act > s.flaws_active[a] ? d.n_act : s.flaws_active[a];
+  const Real cap = damage_root_cap<D>(n_max, s.flaw_count[a], c.mat[s.material_id[a]].damage.capped);
+  return damage_dt_limit(rate, kDamageStepChange, cap - s.damage_root[a]);
+}
+
 // End of an accepted step: the flaws active at the final state join the
 // particle's record (n_active never falls), and delta is held to its cap
-// (n_active/n_flaws)^(1/d) when the material is capped — the growth of the step's last stage may have
-// passed it — but never below its value at the start of the step, which
-// the record's cap already admitted (delta never falls).
+// (n_active/n_flaws)^(1/d) when the material is capped — the growth of the
+// step's last stage may have passed it.
+// The final state's strain is taken at the damage the record admitted
+// before this step, min(delta, cap(n_active)), not at the grown delta: the
+// strain falls as D grows under a compression (damage_local_strain), so
+// counting at the grown delta would drop flaws the step's stages found
+// active and clip delta back to where it started — a particle that then
+// never grows while its rate (> 0) holds the time step (the Nakamura rung
+// stalled at 5e-9 s steps that way).
 template <int D>
 RUBBLE_HD_INLINE void damage_end_step_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   if (!c.mat[s.material_id[a]].damage.enabled || !state_evolves<D>(s, a) || s.flaw_count[a] <= 0) return;
-  const DamageDrive d = damage_drive_particle<D>(c, a);
+  const Real admitted = damage_root_cap<D>(s.flaws_active[a], s.flaw_count[a], c.mat[s.material_id[a]].damage.capped);
+  const DamageDrive d =
+      damage_drive_particle<D>(c, a, s.damage_root[a] < admitted ? s.damage_root[a] : admitted);
   const Real n_max = d.n_act > s.flaws_active[a] ? d.n_act : s.flaws_active[a];
   s.flaws_active[a] = n_max;
   const Real cap = damage_root_cap<D>(n_max, s.flaw_count[a], c.mat[s.material_id[a]].damage.capped);
@@ -844,7 +904,11 @@ RUBBLE_HD_INLINE void shifting_particle(const RhsContext<D>& c, std::uint32_t a,
 }
 
 // Largest stable step of particle a (Courant and force limits); solids use
-// the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho)). With the
+// the longitudinal wave speed sqrt(c^2 + 4 mu / (3 rho)) with the shear
+// modulus that acts, mu times the deviatoric factor (1/alpha of a porous
+// solid, 1 - D of a damaged one: deviatoric_factor_particle), because the
+// stress in the momentum equation is that factor times the evolved S (a
+// fully damaged particle is a fluid and steps at its sound speed). With the
 // kernel-gradient correction h is divided by the correction's gain
 // (kernel_gradient_correction.hpp: correction_gain), the factor by which the
 // corrected stress terms stiffen a truncated kernel.
@@ -854,7 +918,8 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
   const MaterialParams& mat = c.mat[s.material_id[a]];
   Real hM = monaghan_h<D>(c.kernel, s.h[a]);
   if (s.corr_K) hM /= correction_gain<D>(s.corr_K[a]);
-  const Real cl = mat.shear_modulus > Real(0) ? elastic_signal_speed(s.cs[a], mat.shear_modulus, s.rho[a]) : s.cs[a];
+  const Real mu = mat.shear_modulus > Real(0) ? deviatoric_factor_particle<D>(c, a) * mat.shear_modulus : Real(0);
+  const Real cl = mu > Real(0) ? elastic_signal_speed(s.cs[a], mu, s.rho[a]) : s.cs[a];
   const Real dt_c = courant_dt(c.courant, hM, cl, mat.av.alpha, mat.av.beta, s.mu_max[a]);
   const Real dt_f = force_dt(c.force_factor, hM, norm(s.dvdt[a]));
   Real dt = dt_c < dt_f ? dt_c : dt_f;
@@ -863,7 +928,7 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
     dt = dt_a < dt ? dt_a : dt;
   }
   if (s.ddamage_root_dt) {
-    const Real dt_d = damage_dt_limit(s.ddamage_root_dt[a], kDamageStepChange);
+    const Real dt_d = damage_dt_limit_particle<D>(c, a);
     dt = dt_d < dt ? dt_d : dt;
   }
   return dt;

@@ -17,21 +17,26 @@
 // Per particle rubble stores the number of its flaws n_f and the smallest and
 // largest activation strain eps_min, eps_max (not the whole list). Because
 // eps_j^m is proportional to j and the particle's flaws are a uniform random
-// subset of the j's, the flaws active at a strain eps are counted by linear
-// interpolation in eps^m between the two stored ends (active_flaws):
+// subset of the j's, the n_f - 2 flaws between the two stored ends are, given
+// the ends, spread uniformly in eps^m between them, so the expected number
+// active at a strain eps is (active_flaws)
 //   n_act = 0                                                   eps < eps_min
-//         = 1 + (n_f - 1) (eps^m - eps_min^m)/(eps_max^m - eps_min^m)
+//         = 1 + (n_f - 2) x,  x = (eps^m - eps_min^m)/(eps_max^m - eps_min^m)
 //         = n_f                                                 eps >= eps_max
-// exact at both ends and for n_f <= 2, the expected count in between.
+// (the weakest flaw, plus the share x of the interior ones; the strongest
+// joins only at eps_max). Exact for n_f <= 2, the expected count otherwise.
 //
 // Growth. Damage D in [0, 1] is the cracked fraction of a particle's volume.
 // A crack grows at the speed c_g = f_c c_l (f_c = 0.4 by default, the value
 // of BA94; c_l the longitudinal sound speed sqrt(c_s^2 + 4 mu/(3 rho))), so in
 // d dimensions the cracked measure grows as (c_g t)^d and
 //   d(D^(1/d))/dt = n_act c_g / R_s                       (BA95, d = 3)
-// with R_s the radius of the particle's volume V_p = m/rho (sphere in 3-D,
-// disc in 2-D, half the length in 1-D: particle_radius). The evolved field is
-// delta = D^(1/d) ("damage_root").
+// with R_s the crack-growth length (CrackLength): by default the radius of
+// the particle's volume V_p = m/rho (sphere in 3-D, disc in 2-D, half the
+// length in 1-D: particle_radius), BA95's "radius of the volume"; or the
+// kernel support radius, as miluphcuda (damage.cu, 1/sml) and Spheral take
+// it, so that Weibull parameters calibrated with those codes carry over.
+// The evolved field is delta = D^(1/d) ("damage_root").
 // It grows only while the local tensile strain exceeds the particle's
 // weakest flaw (n_act > 0) and never decreases. By default (BA95) a
 // particle's damage cannot exceed the fraction of its flaws ever activated,
@@ -56,11 +61,21 @@
 // and eps_max is a property of the draw (about (N ln N/(k V))^(1/m)), not
 // of the material.
 //
-// Local strain (BA94): eps = sigma_t / E with sigma_t the largest principal
-// stress of the undamaged stress sigma = -p I + S and E = 9 K mu/(3 K + mu)
-// the Young's modulus (K = rho c_s^2 from the EOS, mu the shear modulus).
-// BA94 write sigma_t/((1 - D) E) with sigma_t of the damaged stress, which
-// is the same thing. The out-of-plane components count: plane strain (2-D)
+// Local strain (BA94 eq. 9; miluphcuda's damage.cu does the same):
+//   eps = sigma_t / ((1 - D) E)
+// with sigma_t the largest principal value of the stress that ACTS, i.e. the
+// damaged stress -p_D I + f_D S (p_D = damaged_pressure, f_D = the
+// deviatoric factor: 1 - D, or 1 when damage spares the deviator), and
+// E = 9 K mu/(3 K + mu) the Young's modulus (K = rho c_s^2 from the EOS, mu
+// the shear modulus). Dividing by 1 - D gives the strain of the intact
+// skeleton that carries the acting stress. This differs from the intact
+// stress's sigma_t/E in compression: a compressive p acts in full, so it
+// enters as p/(1 - D) and a damaged particle under pressure needs a larger
+// deviator to reach tension (damage_local_strain). Where damage spares the
+// deviator (deviatoric = false, or a Collins-type yield surface) the acting
+// deviator is the intact one and enters as S/(1 - D). A fully damaged
+// particle (D = 1) grows no further: its strain is reported as 0.
+// The out-of-plane components count: plane strain (2-D)
 // carries sigma_zz = S_zz - p with S_zz = -(S_xx + S_yy), uniaxial strain
 // (1-D) sigma_yy = sigma_zz = -S_xx/2 - p (jaumann_rate.hpp).
 //
@@ -79,6 +94,9 @@
 
 namespace rubble {
 
+// The length R_s over which a crack crosses a particle (growth above).
+enum class CrackLength : int { ParticleRadius = 0, KernelSupport = 1 };
+
 struct DamageParams {
   bool enabled = false;
   Real weibull_k = 0;       // k [m^-3]: n(eps) = k eps^m flaws per unit volume
@@ -86,6 +104,7 @@ struct DamageParams {
   Real crack_speed = 0.4;   // c_g / c_l
   bool deviatoric = true;   // damage also reduces the deviatoric stress
   bool capped = true;       // D <= n_act,max / n_f (BA95); false: D <= 1 only
+  CrackLength crack_length = CrackLength::ParticleRadius;  // R_s of the growth law
 };
 
 // Largest change of delta = D^(1/d) in one step (dt_limit_particle): a
@@ -152,13 +171,24 @@ RUBBLE_HD_INLINE Real local_tensile_strain(const Mat<D>& S, Real p, Real youngs)
   return st > Real(0) && youngs > Real(0) ? st / youngs : Real(0);
 }
 
+// The local strain of a damaged particle (header comment, BA94 eq. 9):
+// sigma_t/((1 - D) E) of the acting stress -p_acting I + S_acting, i.e.
+// local_tensile_strain of (S_acting, p_acting)/(1 - D). 0 for D >= 1.
+template <int D>
+RUBBLE_HD_INLINE Real damage_local_strain(const Mat<D>& S_acting, Real p_acting, Real damage, Real youngs) {
+  const Real intact = Real(1) - damage;
+  if (!(intact > Real(0))) return Real(0);
+  return local_tensile_strain<D>(S_acting, p_acting, youngs) / intact;
+}
+
 // Number of a particle's flaws active at strain eps (see above); n_f = 0
 // (a particle without flaws: another material, a wall) gives 0.
 RUBBLE_HD_INLINE Real active_flaws(Real eps, int n_f, Real eps_min, Real eps_max, Real m) {
   if (n_f <= 0 || !(eps >= eps_min)) return 0;
   if (eps >= eps_max) return Real(n_f);
+  if (n_f <= 2) return Real(1);  // only the weakest is active below eps_max
   const Real lo = std::pow(eps_min, m), hi = std::pow(eps_max, m);
-  const Real n = Real(1) + Real(n_f - 1) * (std::pow(eps, m) - lo) / (hi - lo);
+  const Real n = Real(1) + Real(n_f - 2) * (std::pow(eps, m) - lo) / (hi - lo);
   return n < Real(n_f) ? n : Real(n_f);
 }
 
@@ -202,9 +232,16 @@ RUBBLE_HD_INLINE Real damaged_deviatoric_factor(const DamageParams& dp, Real dam
 }
 
 // Step limit from the growth rate: the change of delta per step is at most
-// fraction (kDamageStepChange); no limit when the particle does not grow.
-RUBBLE_HD_INLINE Real damage_dt_limit(Real rate, Real fraction) {
-  return rate > Real(0) ? fraction / rate : Real(1e30);
+// fraction (kDamageStepChange); no limit when the particle does not grow,
+// nor when it is within `fraction` of its cap (room = cap - delta <=
+// fraction): the cap holds its change to the room however long the step,
+// and its growth then follows the cap, i.e. the strain, which the other
+// limits resolve. (Without that exception a particle creeping up its cap
+// under a compression — the local strain falls as D grows — held every step
+// to fraction/rate although it grew by far less: the Nakamura rung took 3.5
+// times the steps.)
+RUBBLE_HD_INLINE Real damage_dt_limit(Real rate, Real fraction, Real room = Real(1)) {
+  return rate > Real(0) && room > fraction ? fraction / rate : Real(1e30);
 }
 
 }  // namespace rubble

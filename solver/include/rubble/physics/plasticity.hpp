@@ -1,9 +1,11 @@
 #pragma once
 // Perfect plasticity of the deviatoric stress: von Mises (metals, the
-// simplest strength cap) and Drucker–Prager (regolith, soils) after
+// simplest strength cap), Drucker–Prager (regolith, soils) after
 // Bui, Fukagawa, Sako & Ohno 2008, IJNAMG 32:1537 ("Lagrangian meshfree
 // particles method (SPH) for large deformation and failure flows of
-// geomaterial using elastic–plastic soil constitutive model").
+// geomaterial using elastic–plastic soil constitutive model"), and the
+// pressure-dependent strength of intact and damaged rock of Collins, Melosh
+// & Ivanov 2004, Meteoritics & Planet. Sci. 39:217 (collins_yield_strength).
 //
 // Conventions (as in the rest of rubble):
 //  * sigma = -p I + S, tension positive; p is the pressure, compression
@@ -18,6 +20,7 @@
 // Yield functions (f > 0: outside the elastic domain):
 //  von Mises      f = sqrt(3 J2) - Y
 //  Drucker–Prager f = sqrt(J2) + alpha_phi I1 - k_c          (Bui 2008)
+//  Collins        f = sqrt(J2) - Y(p, D, u)                  (Collins 2004)
 // Plastic potential of the Drucker–Prager model (non-associated when
 // alpha_psi != alpha_phi):  g = sqrt(J2) + alpha_psi I1.
 //
@@ -32,7 +35,7 @@
 
 namespace rubble {
 
-enum class PlasticityModel : int { None = 0, VonMises = 1, DruckerPrager = 2 };
+enum class PlasticityModel : int { None = 0, VonMises = 1, DruckerPrager = 2, Collins = 3 };
 
 // Which Mohr–Coulomb fit turns (phi, c) into the Drucker–Prager constants:
 //  PlaneStrain  — Bui 2008 (their eq. for plane strain): the DP cone that
@@ -58,6 +61,13 @@ struct PlasticityParams {  // plain data, copied to the GPU as it is
   Real yield_stress = 0;        // von Mises Y [Pa]
   Real alpha_phi = 0, k_c = 0;  // Drucker–Prager f = sqrt(J2) + alpha_phi I1 - k_c [-, Pa]
   Real alpha_psi = 0;           // dilatancy coefficient of g = sqrt(J2) + alpha_psi I1 (0 = no dilatancy)
+  // Collins et al. 2004 (collins_yield_strength), a limit on sqrt(J2):
+  Real cohesion = 0;            // Y_0: intact strength at p = 0 [Pa]
+  Real friction_intact = 0;     // mu_i: intact friction coefficient [-]
+  Real strength_limit = 0;      // Y_M: intact strength at p -> infinity [Pa], > Y_0
+  Real cohesion_damaged = 0;    // Y_d0: damaged strength at p = 0 [Pa], <= Y_0
+  Real friction_damaged = 0;    // mu_d: damaged friction coefficient [-]
+  Real melt_energy = 0;         // u_melt: thermal softening factor 1 - u/u_melt (0 = none) [J/kg]
 };
 
 // Outcome of plastic_return. The first five members are the agreed API; the
@@ -135,8 +145,86 @@ inline PlasticityParams von_mises_params(Real Y) {
   return pp;
 }
 
+// Collins et al. 2004 rock strength (model Collins).
+inline PlasticityParams collins_params(Real cohesion, Real friction_intact, Real strength_limit,
+                                       Real cohesion_damaged, Real friction_damaged, Real melt_energy) {
+  PlasticityParams pp;
+  pp.model = PlasticityModel::Collins;
+  pp.cohesion = cohesion;
+  pp.friction_intact = friction_intact;
+  pp.strength_limit = strength_limit;
+  pp.cohesion_damaged = cohesion_damaged;
+  pp.friction_damaged = friction_damaged;
+  pp.melt_energy = melt_energy;
+  return pp;
+}
+
 // ---------------------------------------------------------------------------
 // Host-device functions.
+
+// ---- Collins et al. 2004: strength of intact and damaged rock --------------
+//
+// Y is a limit on sqrt(J2) (the convention of miluphcuda's
+// COLLINS_PLASTICITY, "Drucker-Prager-like -> compare to sqrt(J2)", of the
+// iSALE-lineage code SALEc, of SWIFT and of OpenSPH; Spheral alone applies
+// it to sqrt(3 J2)). p is the pressure that acts (compression > 0).
+//
+//  intact (Lundborg 1968, Collins eq. 3):
+//    Y_i(p) = Y_0 + mu_i p / (1 + mu_i p / (Y_M - Y_0))
+//  damaged (Collins eq. 4, a Coulomb law with an optional cohesion):
+//    Y_d(p) = min(Y_d0 + mu_d p, Y_i(p))
+//  damage D in [0, 1] (Collins eq. 5):
+//    Y = (1 - D) Y_i + D Y_d
+//
+// Tension (p < 0), as the iSALE-lineage code does (SALEc's SimpleRock): both
+// curves are continued into tension down to their zeros, the intact one at
+// p_i0 = -Y_0 (Y_M - Y_0)/(mu_i Y_M), the damaged one at -Y_d0/mu_d, and are
+// 0 beyond (no negative strength). The codes differ here (miluphcuda keeps
+// Y_i = Y_0 in tension and gives Y_d slope 1; Spheral and SWIFT keep Y_0 and
+// set Y_d = 0); continuing the curves is the choice that makes strength
+// vanish smoothly as the rock is pulled apart. No further tension cut-off
+// lives here: the tension itself is carried by the EOS, reduced to (1 - D) p
+// by the Grady-Kipp damage (damage.hpp), which breaks rock in tension; a
+// Collins material without damage keeps its intact curve (miluphcuda does
+// the same without FRAGMENTATION).
+//
+// Thermal softening (optional, melt_energy = u_melt > 0): Y_i is multiplied
+// by max(0, 1 - u/u_melt) before Y_d and Y are formed, so the whole surface
+// falls linearly to 0 at the melt energy. This is miluphcuda's
+// COLLINS_PLASTICITY_INCLUDE_MELT_ENERGY (also OpenSPH's); Collins 2004 use
+// Ohnaka's (1995) Y tanh(xi (T_m/T - 1)) with a Simon melting curve, which
+// needs a temperature the Tillotson EOS does not give (not implemented).
+
+// Y_i(p) with its tensile zero (above); mu_i = 0 gives Y_0 at every p.
+RUBBLE_HD_INLINE Real collins_intact_strength(const PlasticityParams& pp, Real p) {
+  if (!(pp.friction_intact > Real(0))) return pp.cohesion;
+  const Real dY = pp.strength_limit - pp.cohesion;  // > 0 (parser)
+  const Real p_zero = -pp.cohesion * dY / (pp.friction_intact * pp.strength_limit);
+  if (p <= p_zero) return Real(0);
+  const Real x = pp.friction_intact * p;
+  return pp.cohesion + x / (Real(1) + x / dY);
+}
+
+// The thermal-softening factor on Y_i: max(0, 1 - u/u_melt), 1 without it.
+RUBBLE_HD_INLINE Real collins_melt_factor(const PlasticityParams& pp, Real u) {
+  if (!(pp.melt_energy > Real(0)) || u <= Real(0)) return Real(1);
+  const Real f = Real(1) - u / pp.melt_energy;
+  return f > Real(0) ? f : Real(0);
+}
+
+// Y_d(p) = min(Y_d0 + mu_d p, Y_i) >= 0, given Y_i at that p.
+RUBBLE_HD_INLINE Real collins_damaged_strength(const PlasticityParams& pp, Real p, Real intact) {
+  const Real y = pp.cohesion_damaged + pp.friction_damaged * p;
+  const Real yd = y < intact ? y : intact;
+  return yd > Real(0) ? yd : Real(0);
+}
+
+// Y(p, D, u) = (1 - D) Y_i + D Y_d, the limit on sqrt(J2).
+RUBBLE_HD_INLINE Real collins_yield_strength(const PlasticityParams& pp, Real p, Real damage, Real u) {
+  const Real yi = collins_intact_strength(pp, p) * collins_melt_factor(pp, u);
+  const Real yd = collins_damaged_strength(pp, p, yi);
+  return (Real(1) - damage) * yi + damage * yd;
+}
 
 // Pressure of the Drucker–Prager apex, p = -k_c/(3 alpha_phi) (the most
 // tensile hydrostatic state the cone admits); only meaningful for
@@ -146,11 +234,14 @@ RUBBLE_HD_INLINE Real dp_apex_pressure(const PlasticityParams& pp) {
 }
 
 // Yield function value (> 0 means outside), J2 the full 3-D invariant and
-// I1 = -3p. For PlasticityModel::None it returns -1 (never yields).
+// I1 = -3p; damage D and specific internal energy u enter the Collins
+// surface only. For PlasticityModel::None it returns -1 (never yields).
 template <int D>
-RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S, Real p) {
+RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S, Real p, Real damage = 0,
+                                     Real u = 0) {
   const Real j2 = deviatoric_j2(S);
   switch (pp.model) {  // no default: a new model is a compiler warning here
+    case PlasticityModel::Collins: return std::sqrt(j2) - collins_yield_strength(pp, p, damage, u);
     case PlasticityModel::VonMises: return std::sqrt(Real(3) * j2) - pp.yield_stress;
     case PlasticityModel::DruckerPrager: {
       const Real I1 = Real(-3) * p;
@@ -163,7 +254,12 @@ RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S
 
 // Return mapping of a trial state (S, p) — the elastic update of this step —
 // with shear modulus G and tangent bulk modulus K (K only enters with
-// dilatancy and for deps_crack).
+// dilatancy and for deps_crack); damage and u enter the Collins surface.
+//
+// Collins (radial return at fixed p, as miluphcuda, iSALE/SALEc, SWIFT and
+// OpenSPH do): with Y = collins_yield_strength(p, D, u), if sqrt(J2) > Y:
+//   S <- S Y/sqrt(J2); p unchanged; dlambda = (sqrt(J2) - Y)/G; deps_v = 0
+//   (no plastic volume change: the flow is non-associated).
 //
 // von Mises (radial return, exact for perfect plasticity):
 //   q = sqrt(3 J2); if q > Y: S <- S Y/q; p unchanged.
@@ -207,10 +303,19 @@ RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S
 // alone would recompute the trial p next step).
 template <int D>
 RUBBLE_HD_INLINE PlasticReturn<D> plastic_return(const PlasticityParams& pp, const Mat<D>& S, Real p, Real G,
-                                                 Real K) {
+                                                 Real K, Real damage = 0, Real u = 0) {
   PlasticReturn<D> r{S, p, Real(0), Real(0), Real(0), Real(0)};
   switch (pp.model) {  // no default: a new model is a compiler warning here
     case PlasticityModel::None: return r;
+    case PlasticityModel::Collins: {
+      const Real Y = collins_yield_strength(pp, p, damage, u);
+      const Real sj2 = std::sqrt(deviatoric_j2(S));
+      if (sj2 > Y) {
+        r.S = S * (Y / sj2);
+        r.dlambda = G > Real(0) ? (sj2 - Y) / G : Real(0);
+      }
+      break;
+    }
     case PlasticityModel::VonMises: {
       const Real q = std::sqrt(Real(3) * deviatoric_j2(S));
       if (q > pp.yield_stress) {

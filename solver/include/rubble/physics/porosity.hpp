@@ -21,8 +21,13 @@
 //   dα_c/dp is continuous at p_t for n1 > 1 and at p_s for n2 > 1, and jumps
 //   at p_e (from 0 to the plastic slope). Requires p_e < p_t < p_s, n1, n2 ≥ 1.
 //   As in miluphcuda and J08's own simplification, α_e is also the initial
-//   distention α0 (the elastic compaction below p_e is small: ~1e-3 for the
-//   porous aluminium of J08 §5.1).
+//   distention α0. The elastic compaction below p_e is then left out of the
+//   crush curve's α_e: small for J08 §5.1's porous aluminium (α falls by
+//   ~1.2e-3 up to p_e, tested), not in general — with c_e = 1500 m/s on the
+//   Tillotson basalt of `porous_basalt` it took 13 % of the porosity by p_e
+//   and moved the start of crushing from 200 to 417 MPa, which is why that
+//   library material has no elastic branch (its source, miluphcuda, uses
+//   c_e only to interpolate a sound speed).
 //
 // Elastic branch (J08 §2, after Herrmann 1969; the same formula is in
 // Spheral's PalphaPorosity and, commented out, in miluphcuda's pressure.cu):
@@ -50,24 +55,31 @@
 //   - Elastic: not plastic, p ≥ 0 and the state on the virgin elastic curve,
 //     α ≥ α_el(p) (within the tolerance): dα/dp|_el.
 //   - None: below the envelope — material that was compacted and unloaded, or
-//     is reloading — or in tension: dα/dt = 0. Because α never rises (below),
-//     an unloaded state keeps the α it had when it left the envelope, so it
-//     returns to the envelope at the very point it left it, and dα/dt stays 0
-//     until then. In particular compacted material (α < α_e) reloading below
-//     p_e does not compact: reloading elastically along the reversible curve
-//     of Herrmann's model would only undo an elastic expansion that the
-//     irreversible model never made, and compacting it would ratchet α down
+//     is reloading — or in tension: dα/dt = 0. Because a compacted α never
+//     rises (below), an unloaded state keeps the α it had when it left the
+//     envelope, so it returns to the envelope at the very point it left it,
+//     and dα/dt stays 0 until then. In particular compacted material
+//     (α < α_e) reloading below p_e does not compact: its elastic range is
+//     the frozen-α matrix response, and compacting it would ratchet α down
 //     in every tension–compression cycle.
-//   dα/dt ≠ 0 only when loading: the numerator above is > 0 (the denominator
-//   is > 0 in every sane state, so this is the sign of dp/dt). The result is
-//   clamped to ≤ 0 (α never rises: PHYSICS.md §4, miluphcuda); Spheral
-//   instead lets α rise again on elastic unloading. 0 for α ≤ 1 or when the
-//   denominator is ≤ 0 (a guard; it does not occur for solid matrices).
-//   An explicit step can end slightly above the envelope (a shock, or
-//   p > p_s): the integrator should then return α to it,
-//   α ← porous_alpha_on_loading_curve(matrix, pp, ρ, u, α) (a no-op on and
-//   below the envelope), and limit the step so that α changes by at most a
-//   fraction (PHYSICS.md: 1e-2) per step (porosity_dt_limit).
+//   The virgin elastic curve is REVERSIBLE (Herrmann 1969; Spheral's
+//   PalphaPorosity lets α rise on elastic unloading): a state on it that has
+//   never crushed — α ≥ α_v, the distention where the elastic curve meets the
+//   crush curve (porosity_virgin_elastic) — follows it both ways, so a load
+//   below the crush curve that passes leaves α₀ behind (tested: a
+//   load–unload cycle returns α to α₀). Once crushed (α < α_v) α never rises
+//   again (PHYSICS.md §4, miluphcuda).
+//   dα/dt ≠ 0 when loading on the envelope (the numerator above is > 0; the
+//   denominator is > 0 in every sane state, so this is the sign of dp/dt),
+//   and when unloading on the virgin elastic curve (then dα/dt ≥ 0, back up
+//   the curve towards α_e). 0 for α ≤ 1 or when the denominator is ≤ 0 (a
+//   guard; it does not occur for solid matrices).
+//   An explicit step can end off the envelope (a shock, p > p_s, or a
+//   virgin state unloaded past the curve): the integrator then returns α to
+//   it at the end of the step, α ← porous_alpha_on_loading_curve(matrix, pp,
+//   ρ, u, α_max) with α_max the start-of-step α, or α_e for a virgin elastic
+//   state (porosity_return_bound), and limits the step so that α changes by
+//   at most a fraction (PHYSICS.md: 1e-2) per step (porosity_dt_limit).
 //
 // Sound speed (PorousEosState::c2): the frozen-α value, ∂p/∂ρ|_{u,α} +
 //   (p/ρ²) ∂p/∂u|_{ρ,α}, which for p = p_s(αρ, u)/α is exactly the matrix
@@ -259,6 +271,25 @@ RUBBLE_HD_INLINE PorosityBranch porosity_branch(const EosParams& matrix, const P
   return PorosityBranch::None;
 }
 
+// Whether α belongs to the virgin (never crushed) part of the elastic curve:
+// the elastic branch is on and the curve's pressure at α is still below the
+// crush curve, α_c(p_el(α)) ≥ α — i.e. α ≥ α_v, where the two curves meet
+// (α_el decreases with p and lies below α_c before the meeting point, above
+// it after). Crushed material has α < α_v. α_e itself is virgin.
+RUBBLE_HD_INLINE bool porosity_virgin_elastic(const EosParams& matrix, const PorosityParams& pp, Real alpha) {
+  if (!pp.enabled || !porosity_elastic_enabled(matrix, pp) || alpha <= Real(1)) return false;
+  if (alpha >= pp.alpha_e) return true;
+  const Real tol = Real(kPorosityCurveRelTol) * alpha;
+  return crush_curve_alpha(pp, porosity_elastic_curve_pressure(matrix, pp, alpha)) >= alpha - tol;
+}
+
+// The upper bound of the end-of-step return (porous_alpha_on_loading_curve):
+// α_e for a virgin elastic state — it may rise back up the reversible curve —
+// else the start-of-step α (a crushed α never rises).
+RUBBLE_HD_INLINE Real porosity_return_bound(const EosParams& matrix, const PorosityParams& pp, Real alpha_start) {
+  return porosity_virgin_elastic(matrix, pp, alpha_start) ? pp.alpha_e : alpha_start;
+}
+
 // dα/dp of the branch porosity_branch chooses (0 for None).
 RUBBLE_HD_INLINE Real porosity_dalpha_dp(const EosParams& matrix, const PorosityParams& pp, Real p, Real alpha) {
   switch (porosity_branch(matrix, pp, p, alpha)) {
@@ -269,8 +300,9 @@ RUBBLE_HD_INLINE Real porosity_dalpha_dp(const EosParams& matrix, const Porosity
   return Real(0);
 }
 
-// dα/dt (header comment): the chain rule of J08 with the branch's dα/dp, only
-// when loading; clamped to ≤ 0; 0 for α ≤ 1 or porosity off.
+// dα/dt (header comment): the chain rule of J08 with the branch's dα/dp —
+// when loading on the envelope (≤ 0), or unloading on the virgin elastic
+// curve (≥ 0); 0 otherwise, for α ≤ 1 or porosity off.
 RUBBLE_HD_INLINE Real porosity_dalpha_dt(const EosParams& matrix, const PorosityParams& pp, Real rho, Real u, Real alpha,
                                          Real drhodt, Real dudt) {
   if (!pp.enabled || alpha <= Real(1)) return Real(0);
@@ -278,13 +310,20 @@ RUBBLE_HD_INLINE Real porosity_dalpha_dt(const EosParams& matrix, const Porosity
   const Real p = eos_evaluate(matrix, rho_s, u).p / alpha;
   const EosDerivatives d = eos_pressure_derivatives_limited(matrix, rho_s, u);
   const Real num = alpha * drhodt * d.dp_drho + dudt * d.dp_du;  // α × dp/dt at frozen α
-  if (!(num > Real(0))) return Real(0);                           // unloading or neutral: α frozen
-  const Real dadp = porosity_dalpha_dp(matrix, pp, p, alpha);
+  const bool loading = num > Real(0);
+  const PorosityBranch branch = porosity_branch(matrix, pp, p, alpha);
+  // unloading: α frozen, except on the reversible virgin elastic curve
+  if (!loading && !(num < Real(0) && branch == PorosityBranch::Elastic && porosity_virgin_elastic(matrix, pp, alpha)))
+    return Real(0);
+  const Real dadp = branch == PorosityBranch::Plastic   ? crush_curve_dalpha_dp(pp, p)
+                    : branch == PorosityBranch::Elastic ? porosity_elastic_dalpha_dp(matrix, pp, alpha)
+                                                        : Real(0);
   if (dadp == Real(0)) return Real(0);
   const Real den = alpha + dadp * (p - rho * d.dp_drho);
   if (!(den > Real(0))) return Real(0);
   const Real r = dadp * num / den;
-  return r < Real(0) ? r : Real(0);
+  if (loading) return r < Real(0) ? r : Real(0);
+  return r > Real(0) ? r : Real(0);
 }
 
 // The return to the loading envelope: the α ≤ alpha_max at which the state

@@ -107,6 +107,13 @@ struct PlasticityConfig {
   double cohesion = 0;         // [Pa] c >= 0
   double dilatancy_angle = 0;  // [deg] psi, 0 <= psi <= phi
   DpConeFit cone = DpConeFit::PlaneStrain;
+  // Collins et al. 2004 rock strength (model "collins"; physics/plasticity.hpp);
+  // cohesion above is its Y_0
+  double friction_intact = 0;   // mu_i >= 0
+  double strength_limit = 0;    // [Pa] Y_M > Y_0
+  double cohesion_damaged = 0;  // [Pa] Y_d0 in [0, Y_0]
+  double friction_damaged = 0;  // mu_d >= 0
+  double melt_energy = 0;       // [J/kg] u_melt > 0, or 0: no thermal softening
 };
 
 // Tensile damage of a solid (Grady & Kipp 1980; Benz & Asphaug 1994, 1995):
