@@ -392,6 +392,13 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const rubble::RunError& e) {
     std::cerr << "rubble: error: " << e.what() << "\n";
+    // --timings on a failed run too (issue #50 item 6)
+    if (*run && run_args.timings && !e.phase_seconds.empty()) {
+      std::printf("rubble: where the time went before the failure (wall seconds, share of %.3g s):\n", e.wall_seconds);
+      for (const auto& [phase, seconds] : e.phase_seconds)
+        std::printf("  %-40s %10.3f  %5.1f %%\n", phase.c_str(), seconds, 100 * seconds / e.wall_seconds);
+      std::fflush(stdout);
+    }
     return 3;
   } catch (const rubble::OutputError& e) {
     std::cerr << "rubble: error: output: " << e.what() << "\n";

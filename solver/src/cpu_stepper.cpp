@@ -298,7 +298,7 @@ bool CpuBackend<D>::solid_forces_pair_once(const RhsContext<D>& c) {
     }
     if (s.dalphadt)
       for (std::size_t a = lo; a < hi; ++a)
-        s.dalphadt[a] = porosity_rate_particle<D>(c, static_cast<std::uint32_t>(a), s.drhodt[a], s.dudt[a]);
+        porosity_rates_particle<D>(c, static_cast<std::uint32_t>(a), s.drhodt[a], s.dudt[a]);
   }
   return true;
 }

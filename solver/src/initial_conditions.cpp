@@ -402,32 +402,53 @@ void check_resources(const Scene& scene, const Features& needs, double hfact) {
 }
 
 template <int D>
-void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
-                   const Box<D>& domain, double hfact) {
-  if (scene.simulation.allow_overlap || scene.bodies.size() < 2) return;
+std::vector<std::string> check_overlap(const Scene& scene, const ParticleStore<D>& ps,
+                                       const std::vector<std::int64_t>& body_first, const Box<D>& domain,
+                                       double hfact) {
+  if (scene.simulation.allow_overlap || scene.bodies.size() < 2) return {};
   const std::size_t n = ps.n;
-  std::vector<Real> reach(n);  // half the particle's spacing
-  for (std::size_t i = 0; i < n; ++i) reach[i] = Real(0.5) * ps.h[i] / Real(hfact);
+  // one search to the kernel support: pairs closer than half a spacing are an
+  // overlap (an error), pairs of free bodies within a support interact at once
   CellList<D> cells;
-  cells.build(ps.x.data(), reach.data(), n, bounding_box<D>(ps.x.data(), n, domain));
+  cells.build(ps.x.data(), ps.h.data(), n, bounding_box<D>(ps.x.data(), n, domain));
   NeighborLists nb;
   cells.find_neighbors(nb);
   auto body_of = [&](std::size_t i) { return body_of_id(body_first, ps.id[i]); };
+  auto free_particle = [&](std::size_t i) { return ps.boundary.empty() || ps.boundary[i] == kFreeParticle; };
+  const std::size_t nbodies = scene.bodies.size();
+  std::vector<Real> closest(nbodies * nbodies, Real(-1));  // per pair of free bodies in contact, -1: none
   for (std::size_t a = 0; a < n; ++a)
     nb.for_each(a, [&](std::size_t b) {
       if (b <= a) return;
       const std::size_t ka = body_of(a), kb = body_of(b);
       if (ka == kb) return;
       const Real r = norm(domain.separation(ps.x[a], ps.x[b]));
-      if (!(r < std::min(reach[a], reach[b]))) return;
-      const std::size_t first = std::min(ka, kb), second = std::max(ka, kb);
-      throw InputError(scene.file, "bodies[" + std::to_string(second) + "]",
-                       "overlaps bodies[" + std::to_string(first) + "]: particles " +
-                           std::to_string(ps.id[a] - body_first[ka]) + " of bodies[" + std::to_string(ka) + "] and " +
-                           std::to_string(ps.id[b] - body_first[kb]) + " of bodies[" + std::to_string(kb) + "] are " +
-                           fmt_g(r) + " m apart, less than half their spacing; move the bodies apart, or set "
-                           "simulation.allow_overlap = true if they are meant to overlap");
+      const Real half_a = Real(0.5) * ps.h[a] / Real(hfact), half_b = Real(0.5) * ps.h[b] / Real(hfact);
+      if (r < std::min(half_a, half_b)) {
+        const std::size_t first = std::min(ka, kb), second = std::max(ka, kb);
+        throw InputError(scene.file, "bodies[" + std::to_string(second) + "]",
+                         "overlaps bodies[" + std::to_string(first) + "]: particles " +
+                             std::to_string(ps.id[a] - body_first[ka]) + " of bodies[" + std::to_string(ka) +
+                             "] and " + std::to_string(ps.id[b] - body_first[kb]) + " of bodies[" +
+                             std::to_string(kb) + "] are " + fmt_g(r) +
+                             " m apart, less than half their spacing; move the bodies apart, or set "
+                             "simulation.allow_overlap = true if they are meant to overlap");
+      }
+      if (!free_particle(a) || !free_particle(b) || !(r < std::max(ps.h[a], ps.h[b]))) return;
+      Real& c = closest[std::min(ka, kb) * nbodies + std::max(ka, kb)];
+      if (c < 0 || r < c) c = r;
     });
+  std::vector<std::string> warnings;
+  for (std::size_t i = 0; i < nbodies; ++i)
+    for (std::size_t j = i + 1; j < nbodies; ++j) {
+      const Real r = closest[i * nbodies + j];
+      if (r < 0) continue;
+      warnings.push_back(scene.file + ": bodies[" + std::to_string(i) + "] and bodies[" + std::to_string(j) +
+                         "] start within a kernel support of each other (closest particles " + fmt_g(r) +
+                         " m apart): they interact from the first step. Intended for bodies in contact; move "
+                         "them apart by a support radius if they should meet later");
+    }
+  return warnings;
 }
 
 template <int D>
@@ -449,7 +470,7 @@ Box<D> domain_from_scene(const Scene& scene) {
   template double estimated_particle_count<D>(const Scene&);                                       \
   template std::size_t bytes_per_particle<D>(const Scene&, const Features&, double);              \
   template void check_resources<D>(const Scene&, const Features&, double);                        \
-  template void check_overlap<D>(const Scene&, const ParticleStore<D>&, const std::vector<std::int64_t>&, \
+  template std::vector<std::string> check_overlap<D>(const Scene&, const ParticleStore<D>&, const std::vector<std::int64_t>&, \
                                  const Box<D>&, double);
 RUBBLE_INSTANTIATE(1)
 RUBBLE_INSTANTIATE(2)

@@ -321,19 +321,35 @@ std::string fault_value(const ParticleStore<D>& ps, std::size_t i, int fault) {
 
 // The first particle of `ps` that fails the state check, described; empty
 // if none does.
+// The first particle that fails the state check: who it is (describe_particle)
+// and what is wrong ("invalid rho (rho = -3; must be finite and > 0)");
+// both empty when every particle passes.
+struct Fault {
+  std::string particle, problem;
+  int fault = kStateOk;
+  std::size_t index = 0;
+};
 template <int D>
-std::string first_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first, int* fault_out = nullptr,
-                        std::size_t* index_out = nullptr) {
+Fault find_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first) {
   const StoreView<D> s = const_cast<ParticleStore<D>&>(ps).view();  // read only
   for (std::size_t i = 0; i < ps.n; ++i) {
     const int fault = particle_fault<D>(s, std::uint32_t(i));
     if (fault == kStateOk) continue;
-    if (fault_out) *fault_out = fault;
-    if (index_out) *index_out = i;
-    return std::string("invalid ") + state_fault_field(fault) + " (" + fault_value<D>(ps, i, fault) + "; must be " +
-           state_fault_requirement(fault) + ") in " + describe_particle<D>(ps, i, body_first);
+    return Fault{describe_particle<D>(ps, i, body_first),
+                 std::string("invalid ") + state_fault_field(fault) + " (" + fault_value<D>(ps, i, fault) +
+                     "; must be " + state_fault_requirement(fault) + ")",
+                 fault, i};
   }
   return {};
+}
+
+template <int D>
+std::string first_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first, int* fault_out = nullptr,
+                        std::size_t* index_out = nullptr) {
+  const Fault f = find_fault<D>(ps, body_first);
+  if (fault_out) *fault_out = f.fault;
+  if (index_out) *index_out = f.index;
+  return f.particle.empty() ? std::string() : f.problem + " in " + f.particle;
 }
 
 // The initial state (before anything is written): a failing particle is
@@ -390,18 +406,21 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   std::string stopped, checkpoint;
 
   // A step that failed: the last good state (the stepper's copy from
-  // before the step) goes to NAME.failed.h5, and the message names what
-  // failed, in which particle (of the failing state), when.
+  // before the step) goes to NAME.failed.h5, and the message leads with the
+  // particle that failed (of the failing state: its body, id and position),
+  // then when, what is wrong with it, and what noticed it (`cause`, e.g. the
+  // neighbour search's own words, which name an internal array index).
   double good_t = t;
   std::int64_t good_step = step;
-  auto fail = [&](const std::string& what) {
-    const std::string detail = first_fault<D>(sys.host(), body_first);
+  auto fail = [&](const std::string& cause, const std::string& when) {
+    const Fault f = find_fault<D>(sys.host(), body_first);
     const std::string file = out.diagnostic(sys.last_good(), good_t, good_step);
     const std::string where =
         file.empty() ? std::string()
                      : "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) +
                            ") is in " + file;
-    return RunError(what + (detail.empty() ? "" : ": " + detail) + where);
+    if (f.particle.empty()) return RunError(cause + " " + when + where);
+    return RunError(f.particle + ", " + when + ": " + f.problem + " (" + cause + ")" + where);
   };
 
   // where the time goes (FinalState::phase_seconds)
@@ -412,99 +431,127 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   RhsPhaseSeconds rhs_before{};
   if constexpr (kRhsPhases) rhs_before = sys.rhs_phase_seconds();
 
+  // where the time went so far (FinalState::phase_seconds; a failed run's RunError)
+  const auto phases = [&] {
+    std::vector<std::pair<std::string, double>> ph = {
+        {"set-up", set_up}, {"sort", t_sort}, {"time-step limit", t_limit}, {"state checks", t_checks}};
+    if constexpr (kRhsPhases) {
+      const RhsPhaseSeconds& r = sys.rhs_phase_seconds();
+      const double nb = r.neighbours - rhs_before.neighbours, de = r.density - rhs_before.density,
+                   eo = r.eos - rhs_before.eos, fo = r.forces - rhs_before.forces,
+                   es = r.end_step - rhs_before.end_step;
+      ph.insert(ph.end(), {{"neighbour search", nb},
+                           {"density and h", de},
+                           {"EOS", eo},
+                           {"forces", fo},
+                           {"end of step", es},
+                           {"integration", t_step - (nb + de + eo + fo + es)}});
+    } else {
+      ph.push_back({"step (right-hand side and integration)", t_step});
+    }
+    ph.push_back({"output", t_output});
+    return ph;
+  };
+
   constexpr int kSortEvery = 16;  // re-sort along the space-filling curve
-  while (t < t_end * (1 - 1e-12)) {
-    if (step >= sim.max_steps)
-      throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t) + " s");
-    // Sorting permutes every field, rates included, so the state needs no
-    // new evaluation; neighbour lists are rebuilt at each evaluation anyway.
-    auto t0 = Clock::now();
-    if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
-    t_sort += since(t0);
-    t0 = Clock::now();
-    sys.keep_good();
-    t_checks += since(t0);
-    good_t = t;
-    good_step = step;
-    t0 = Clock::now();
-    const double limit = sys.dt_limit();
-    t_limit += since(t0);
-    double dt = std::min(limit, loop.next_output - t);
-    // the step the physics allows, before it is shortened to land on an
-    // output or the end of damping: what simulation.dt_min bounds
-    double dt_physics = limit;
-    const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
-    if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
-    const double t_before = t;
-    t0 = Clock::now();
-    try {
-      if (sim.integrator == Integrator::Leapfrog) {
-        sys.leapfrog(dt);
-      } else {
-        dt_physics = std::min(limit, loop.dt_proposal);
-        dt = std::min(dt, loop.dt_proposal);
-        const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
-        if (r.rejections > 0) dt_physics = std::min(dt_physics, double(r.dt_taken));  // error control cut it
-        dt = r.dt_taken;
-        loop.dt_proposal = r.dt_next;
+  try {
+    while (t < t_end * (1 - 1e-12)) {
+      if (step >= sim.max_steps)
+        throw RunError("reached simulation.max_steps = " + std::to_string(sim.max_steps) + " at t = " + fmt_g(t) + " s");
+      // Sorting permutes every field, rates included, so the state needs no
+      // new evaluation; neighbour lists are rebuilt at each evaluation anyway.
+      auto t0 = Clock::now();
+      if (step > 0 && step % kSortEvery == 0) sys.sort_particles();
+      t_sort += since(t0);
+      t0 = Clock::now();
+      sys.keep_good();
+      t_checks += since(t0);
+      good_t = t;
+      good_step = step;
+      t0 = Clock::now();
+      const double limit = sys.dt_limit();
+      t_limit += since(t0);
+      double dt = std::min(limit, loop.next_output - t);
+      // the step the physics allows, before it is shortened to land on an
+      // output or the end of damping: what simulation.dt_min bounds
+      double dt_physics = limit;
+      const bool damped = sim.damping_time > 0 && t < sim.damping_end * (1 - 1e-12);
+      if (damped) dt = std::min(dt, sim.damping_end - t);  // the damped phase ends on a step
+      const double t_before = t;
+      t0 = Clock::now();
+      try {
+        if (sim.integrator == Integrator::Leapfrog) {
+          sys.leapfrog(dt);
+        } else {
+          dt_physics = std::min(limit, loop.dt_proposal);
+          dt = std::min(dt, loop.dt_proposal);
+          const Rk2Result r = sys.rk2(dt, sim.rk2_tolerance, dt_min);
+          if (r.rejections > 0) dt_physics = std::min(dt_physics, double(r.dt_taken));  // error control cut it
+          dt = r.dt_taken;
+          loop.dt_proposal = r.dt_next;
+        }
+      } catch (const RunError& e) {
+        // inside the step: the neighbour search or the smoothing-length iteration
+        throw fail(e.what(), "in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s");
       }
-    } catch (const RunError& e) {
-      // inside the step: the neighbour search or the smoothing-length iteration
-      throw fail(std::string(e.what()) + " in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s");
-    }
-    t_step += since(t0);
-    t += dt;
-    ++step;
-    // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
-    if (damped) sys.damp(std::exp(-dt / sim.damping_time));
+      t_step += since(t0);
+      t += dt;
+      ++step;
+      // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
+      if (damped) sys.damp(std::exp(-dt / sim.damping_time));
 
-    // checked where the state lives (a device reduction on the CUDA backend):
-    // the host copy is fetched only for a snapshot, a diagnostic or the end
-    t0 = Clock::now();
-    if (sys.first_non_finite() < sys.size())
-      throw fail("the state check failed at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")");
-    t_checks += since(t0);
-    if (dt_physics < dt_min && t < t_end * (1 - 1e-12)) {
-      const std::string file = out.diagnostic(sys.host(), t, step);
-      throw RunError("time step collapsed to " + fmt_g(dt_physics) + " s < dt_min = " + fmt_g(dt_min) +
-                     " s at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")" +
-                     (file.empty() ? "" : "; the state is in " + file));
-    }
-    progress.update(t, dt, step);
-    const bool output_time = t >= loop.next_output * (1 - 1e-12);
-    // conserved.csv: a row per output.conserved_interval crossed (a function
-    // of t alone, so a resumed run logs the same rows), at every snapshot
-    // and at the end
-    const double ci = scene.output.conserved_interval;
-    t0 = Clock::now();
-    if (out.enabled() && (ci <= 0 || std::floor(t / ci) != std::floor(t_before / ci) || output_time ||
-                          t >= t_end * (1 - 1e-12)))
-      out.log(sys.conserved(t, step, dt));
-    if (output_time) {
-      loop.next_output = std::min(loop.next_output + out_interval, t_end);
-      if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
-    }
-    t_output += since(t0);
+      // checked where the state lives (a device reduction on the CUDA backend):
+      // the host copy is fetched only for a snapshot, a diagnostic or the end
+      t0 = Clock::now();
+      if (sys.first_non_finite() < sys.size())
+        throw fail("the state check failed", "at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")");
+      t_checks += since(t0);
+      if (dt_physics < dt_min && t < t_end * (1 - 1e-12)) {
+        const std::string file = out.diagnostic(sys.host(), t, step);
+        throw RunError("time step collapsed to " + fmt_g(dt_physics) + " s < dt_min = " + fmt_g(dt_min) +
+                       " s at t = " + fmt_g(t) + " s (step " + std::to_string(step) + ")" +
+                       (file.empty() ? "" : "; the state is in " + file));
+      }
+      progress.update(t, dt, step);
+      const bool output_time = t >= loop.next_output * (1 - 1e-12);
+      // conserved.csv: a row per output.conserved_interval crossed (a function
+      // of t alone, so a resumed run logs the same rows), at every snapshot
+      // and at the end
+      const double ci = scene.output.conserved_interval;
+      t0 = Clock::now();
+      if (out.enabled() && (ci <= 0 || std::floor(t / ci) != std::floor(t_before / ci) || output_time ||
+                            t >= t_end * (1 - 1e-12)))
+        out.log(sys.conserved(t, step, dt));
+      if (output_time) {
+        loop.next_output = std::min(loop.next_output + out_interval, t_end);
+        if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
+      }
+      t_output += since(t0);
 
-    const double now = wall();
-    slowest_step = std::max(slowest_step, now - last_wall);
-    last_wall = now;
-    if (t >= t_end * (1 - 1e-12)) break;
-    if (g_stop_signal != 0) stopped = g_stop_signal == SIGINT ? "SIGINT" : g_stop_signal == SIGTERM ? "SIGTERM" : "a signal";
-    else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
-      stopped = "the wall-time limit";
-    if (!stopped.empty()) {
-      t0 = Clock::now();
-      checkpoint = out.checkpoint(sys.host(), t, step, loop);
-      t_output += since(t0);
-      break;
+      const double now = wall();
+      slowest_step = std::max(slowest_step, now - last_wall);
+      last_wall = now;
+      if (t >= t_end * (1 - 1e-12)) break;
+      if (g_stop_signal != 0) stopped = g_stop_signal == SIGINT ? "SIGINT" : g_stop_signal == SIGTERM ? "SIGTERM" : "a signal";
+      else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
+        stopped = "the wall-time limit";
+      if (!stopped.empty()) {
+        t0 = Clock::now();
+        checkpoint = out.checkpoint(sys.host(), t, step, loop);
+        t_output += since(t0);
+        break;
+      }
+      if (next_checkpoint > 0 && now >= next_checkpoint) {
+        t0 = Clock::now();
+        out.checkpoint(sys.host(), t, step, loop);
+        t_output += since(t0);
+        next_checkpoint = wall() + opt.checkpoint_every_seconds;
+      }
     }
-    if (next_checkpoint > 0 && now >= next_checkpoint) {
-      t0 = Clock::now();
-      out.checkpoint(sys.host(), t, step, loop);
-      t_output += since(t0);
-      next_checkpoint = wall() + opt.checkpoint_every_seconds;
-    }
+  } catch (RunError& e) {  // a failed run: its timings go with the error (--timings)
+    e.phase_seconds = phases();
+    e.wall_seconds = wall();
+    throw;
   }
   progress.finish();
   // The copy of the final state below comes on top of what the stepper
@@ -513,22 +560,8 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   if constexpr (requires { sys.release_work_memory(); }) sys.release_work_memory();
 
   FinalState fs;
-  fs.phase_seconds = {{"set-up", set_up}, {"sort", t_sort}, {"time-step limit", t_limit}, {"state checks", t_checks}};
-  if constexpr (kRhsPhases) {
-    const RhsPhaseSeconds& r = sys.rhs_phase_seconds();
-    const double nb = r.neighbours - rhs_before.neighbours, de = r.density - rhs_before.density,
-                 eo = r.eos - rhs_before.eos, fo = r.forces - rhs_before.forces, es = r.end_step - rhs_before.end_step;
-    fs.phase_seconds.insert(fs.phase_seconds.end(), {{"neighbour search", nb},
-                                                     {"density and h", de},
-                                                     {"EOS", eo},
-                                                     {"forces", fo},
-                                                     {"end of step", es},
-                                                     {"integration", t_step - (nb + de + eo + fo + es)}});
-    fs.neighbour_searches = sys.neighbour_searches();
-  } else {
-    fs.phase_seconds.push_back({"step (right-hand side and integration)", t_step});
-  }
-  fs.phase_seconds.push_back({"output", t_output});
+  fs.phase_seconds = phases();
+  if constexpr (kRhsPhases) fs.neighbour_searches = sys.neighbour_searches();
 
   const ParticleStore<D>& ps = sys.host();
   fs.backend = Stepper::name;
@@ -581,7 +614,8 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   if (opt.restart_from.empty()) {
     body_first = generate_bodies<D>(scene, hfact, needs, ps);
     check_initial_state<D>(scene, ps, body_first);  // x, v, rho, h, u as generated
-    check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact);
+    for (const std::string& w : check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact))
+      std::fprintf(stderr, "rubble: warning: %s\n", w.c_str());
     if (!opt.quiet && opt.write_output) {
       const std::size_t per = bytes_per_particle<D>(scene, needs, hfact);
       std::fprintf(stderr, "rubble: %zu particles, about %s of memory (%zu bytes each)\n", ps.n,

@@ -795,7 +795,8 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
   choice(q, "model", qp, 0, {{"p_alpha", 0}});
   c.curve = choice(q, "crush_curve", qp, CrushCurve::Quadratic,
                          {{"quadratic", CrushCurve::Quadratic}, {"steep", CrushCurve::Steep}});
-  std::vector<std::string> known = {"model", "crush_curve", "alpha0", "p_e", "p_s", "c_e", "c_s0"};
+  std::vector<std::string> known = {"model", "crush_curve", "alpha0", "p_e", "p_s", "c_e", "c_s0",
+                                    "deviatoric_rate_factor"};
   if (c.curve == CrushCurve::Steep) known.insert(known.end(), {"p_t", "alpha_t", "n1", "n2"});
   check_keys(q, qp, known);
   if (m.eos == EosKind::IdealGas)
@@ -808,6 +809,8 @@ void SceneReader::read_porosity(const toml::table& q, const std::string& qp, Mat
   require(c.p_e >= 0, q, "p_e", qp, c.p_e, ">= 0");
   c.p_s = required_number(q, "p_s", qp, "the full-compaction pressure [Pa]");
   require(c.p_s > c.p_e, q, "p_s", qp, c.p_s, "> p_e = " + fmt(c.p_e) + " (the crush curve runs from p_e to p_s)");
+  // J08's factor on a porous solid's deviatoric stress rate (physics/porosity.hpp)
+  if (auto b = boolean(q, "deviatoric_rate_factor", qp)) c.deviatoric_rate_factor = *b;
   // The elastic branch (J08 §3.2) needs both sound speeds; a material that
   // gives neither has none: alpha stays alpha0 until p exceeds p_e.
   if (q.contains("c_e") || q.contains("c_s0")) {

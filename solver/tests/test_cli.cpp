@@ -402,6 +402,26 @@ TEST_F(Cli, UnusableInitialStateIsRefused) {
 // exit code 3 and a message naming the field, the particle by body and
 // original index, its position, the time and step; NAME.failed.h5 holds
 // the last good state.
+// Issue #50 item 6: bodies that start within a kernel support of each other
+// interact from the first step; the run says so, naming both, and goes on.
+TEST_F(Cli, BodiesWithinAKernelSupportAreNamedInAWarning) {
+  auto two_boxes = [&](const std::string& second_min) {
+    std::string t = replace(kValid, "max = [1.0]", "max = [0.5]");
+    t += "[[bodies]]\nshape = \"box\"\nmaterial = \"gas\"\nmin = [" + second_min +
+         "]\nmax = [1.5]\nspacing = 0.05\ndensity = 1.0\npressure = 1.0\n";
+    return t;
+  };
+  write_scene("touching.toml", two_boxes("0.5"));  // one spacing apart: inside each other's support
+  const Result touching = rubble("run touching.toml --quiet");
+  EXPECT_EQ(touching.code, 0) << touching.err;
+  for (const char* part : {"warning", "touching.toml", "bodies[0] and bodies[1]", "kernel support"})
+    EXPECT_NE(touching.err.find(part), std::string::npos) << "stderr lacks '" << part << "': " << touching.err;
+  write_scene("apart.toml", two_boxes("0.8"));  // 0.25 apart: beyond the support (2.4 x 0.05 = 0.12)
+  const Result apart = rubble("run apart.toml --quiet");
+  EXPECT_EQ(apart.code, 0) << apart.err;
+  EXPECT_EQ(apart.err.find("warning"), std::string::npos) << apart.err;
+}
+
 TEST_F(Cli, FailedStepNamesTheParticleAndKeepsTheLastGoodState) {
   std::string split = replace(replace(kValid, "end_time = 0.001", "end_time = 1.0\nintegrator = \"leapfrog\"\ndensity = \"continuity\""),
                               "max = [1.0]", "max = [0.5]");
@@ -416,10 +436,18 @@ TEST_F(Cli, FailedStepNamesTheParticleAndKeepsTheLastGoodState) {
     EXPECT_NE(r.err.find(part), std::string::npos) << "stderr lacks '" << part << "': " << r.err;
   // the time: the CPU backend finds the density inside the step ("in step 1
   // from t = 0 s"), the CUDA backend by the state check after it, whose
-  // kernels cannot stop mid-step ("the state check failed at t = 1 s (step 1)")
-  const char* when = backend_from_environment() == "cuda" ? "the state check failed at t = 1 s (step 1)"
-                                                          : "in step 1 from t = 0 s";
+  // kernels cannot stop mid-step ("at t = 1 s (step 1)")
+  const char* when = backend_from_environment() == "cuda" ? "at t = 1 s (step 1)" : "in step 1 from t = 0 s";
   EXPECT_NE(r.err.find(when), std::string::npos) << "stderr lacks '" << when << "': " << r.err;
+  // issue #50 item 6: the message leads with the particle (body, position) and the time, then what is wrong
+  const std::size_t particle = r.err.find("particle "), time = r.err.find(when), problem = r.err.find("invalid rho");
+  EXPECT_LT(particle, time) << r.err;
+  EXPECT_LT(time, problem) << r.err;
+  // --timings on a failed run too (issue #50 item 6)
+  const Result timed = rubble("run split.toml --quiet --timings --out timed");
+  EXPECT_EQ(timed.code, 3) << timed.err;
+  EXPECT_NE(timed.out.find("rubble: where the time went before the failure"), std::string::npos) << timed.out;
+  EXPECT_NE(timed.out.find("  time-step limit "), std::string::npos) << timed.out;
   const rubble::SnapshotMeta failed = rubble::read_snapshot_meta((dir_ / "out" / "split" / "snapshot.failed.h5").string());
   EXPECT_EQ(failed.step, 0);
   EXPECT_FALSE(failed.restartable) << "a diagnostic is not a restart point";

@@ -133,6 +133,12 @@ TEST(PorosityScene, KeysAreReadWithDefaults) {
   EXPECT_EQ(p.p_e, 8e7);
   EXPECT_EQ(p.p_s, 7e8);
   EXPECT_EQ(p.n2, 2.0);  // Jutzi 2008 eq. 8 (the quadratic curve's exponent, the params' default)
+  EXPECT_TRUE(p.deviatoric_rate_factor);  // Jutzi 2008's factor on dS/dt, on by default
+  EXPECT_FALSE(parse_scene(porous_rod("porosity = { model = \"p_alpha\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8, "
+                                      "deviatoric_rate_factor = false }"),
+                           "t.toml")
+                   .materials[0]
+                   .porosity.deviatoric_rate_factor);
   const Scene t = parse_scene(porous_rod("porosity = { model = \"p_alpha\", crush_curve = \"steep\", alpha0 = 4.64, "
                                          "alpha_t = 1.9, p_e = 1e6, p_t = 6.8e7, p_s = 2.13e8, n1 = 12.0, n2 = 3.0, "
                                          "c_e = 1500.0, c_s0 = 3000.0 }"),
@@ -194,6 +200,8 @@ TEST(PorosityScene, BadValuesNameTheKey) {
        "materials.al.porosity.crush_curve"},
       {"porosity = { model = \"sponge\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8" + tail, "materials.al.porosity.model"},
       {base + "alpha0 = nan, p_e = 8e7, p_s = 7e8" + tail, "materials.al.porosity.alpha0"},
+      {base + "alpha0 = 1.275, p_e = 8e7, p_s = 7e8, deviatoric_rate_factor = 1" + tail,
+       "materials.al.porosity.deviatoric_rate_factor"},
   };
   for (const Case& c : cases) {
     const std::string msg = parse_error(porous_rod(c.porosity));

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace rubble {
 
@@ -23,6 +25,11 @@ class InputError : public std::runtime_error {
 class RunError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+  // where the wall time went until the failure (the run loop fills it on
+  // the way out, so `rubble run --timings` prints it on a failed run too);
+  // empty for a failure before the loop
+  std::vector<std::pair<std::string, double>> phase_seconds;
+  double wall_seconds = 0;
 };
 
 // Output that could not be written (an unwritable or full disk, a

@@ -356,6 +356,19 @@ RUBBLE_HD_INLINE Real porosity_rate_particle(const RhsContext<D>& c, std::uint32
   return porosity_dalpha_dt(mat.eos, mat.porosity, scale * s.rho[a], s.u[a], s.alpha[a], scale * drhodt, dudt);
 }
 
+// Once a's d rho/dt and du/dt are complete: d alpha/dt, and for a porous
+// solid J08's factor on its deviatoric stress rate (porosity.hpp:
+// porous_deviatoric_rate_factor; pass 1 computed dS/dt, pass 2 the rates it
+// needs). Both backends' loops end with this.
+template <int D>
+RUBBLE_HD_INLINE void porosity_rates_particle(const RhsContext<D>& c, std::uint32_t a, Real drhodt, Real dudt) {
+  const StoreView<D>& s = c.s;
+  s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
+  const PorosityParams& pp = c.mat[s.material_id[a]].porosity;
+  if (s.dSdt && pp.enabled && pp.deviatoric_rate_factor && state_evolves<D>(s, a))
+    s.dSdt[a] = porous_deviatoric_rate_factor(s.rho[a], s.alpha[a], drhodt, s.dalphadt[a]) * s.dSdt[a];
+}
+
 // The plastic return mapping of particle a's deviatoric stress onto its
 // material's yield surface (plasticity.hpp: plastic_return), at the
 // pressure of the last eos_particle. The return acts on the intact stress
@@ -571,7 +584,7 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   if (!c.summation) s.drhodt[a] = drhodt;
-  if (s.dalphadt) s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
+  if (s.dalphadt) porosity_rates_particle<D>(c, a, drhodt, dudt);
   if (s.dav_alpha_dt) s.dav_alpha_dt[a] = viscosity_switch_rate_particle<D>(c, a, drhodt);
   s.mu_max[a] = mu_max;
 }
@@ -835,7 +848,7 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
   s.dvdt[a] = dvdt;
   s.dudt[a] = dudt;
   s.drhodt[a] = drhodt;
-  if (s.dalphadt) s.dalphadt[a] = porosity_rate_particle<D>(c, a, drhodt, dudt);
+  if (s.dalphadt) porosity_rates_particle<D>(c, a, drhodt, dudt);
   s.mu_max[a] = mu_max;
 }
 

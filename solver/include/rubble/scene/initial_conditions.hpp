@@ -73,10 +73,14 @@ void check_resources(const Scene& scene, const Features& needs, double hfact);
 
 // Bodies whose particles come closer than half the particle spacing
 // (estimated per particle as h / hfact) overlap: an InputError naming both
-// bodies, unless simulation.allow_overlap.
+// bodies, unless simulation.allow_overlap. Returns one warning per pair of
+// free bodies (not walls) that start within a kernel support of each other
+// — they interact from the first step — naming both and their closest
+// particles' distance (none with allow_overlap).
 template <int D>
-void check_overlap(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
-                   const Box<D>& domain, double hfact);
+std::vector<std::string> check_overlap(const Scene& scene, const ParticleStore<D>& ps,
+                                       const std::vector<std::int64_t>& body_first, const Box<D>& domain,
+                                       double hfact);
 
 // The domain box from [domain]: periodic axes get their bounds.
 template <int D>
