@@ -200,7 +200,8 @@ struct EosArgs {
 
 // "A:B:N" (N points from A to B, ends included; N = 1 needs A = B) with an
 // optional ":log" for logarithmic spacing; A > 0, or A >= 0 if zero_allowed.
-std::vector<double> parse_range(const std::string& text, const std::string& option, bool zero_allowed) {
+std::vector<double> parse_range(const std::string& text, const std::string& option, bool zero_allowed,
+                                bool negative_allowed = false) {
   const std::string usage = "expected A:B:N or A:B:N:log (N points from A to B), got '" + text + "'";
   std::vector<std::string> parts;
   for (std::size_t start = 0;;) {
@@ -229,7 +230,7 @@ std::vector<double> parse_range(const std::string& text, const std::string& opti
   if (nd != std::floor(nd) || nd < 1 || nd > 1e6)
     throw rubble::InputError(option, "", "N = '" + parts[2] + "' must be a whole number from 1 to 1e6; " + usage);
   const long n = static_cast<long>(nd);
-  if (zero_allowed ? a < 0 : a <= 0)
+  if (!negative_allowed && (zero_allowed ? a < 0 : a <= 0))
     throw rubble::InputError(option, "", std::string("A must be ") + (zero_allowed ? ">= 0" : "> 0") + ", got " + parts[0]);
   if (log && a <= 0) throw rubble::InputError(option, "", "log spacing needs A > 0, got " + parts[0]);
   if (n == 1 && a != b) throw rubble::InputError(option, "", "N = 1 needs A = B (one point); " + usage);
@@ -241,6 +242,49 @@ std::vector<double> parse_range(const std::string& text, const std::string& opti
   }
   if (n > 1) v.back() = b;
   return v;
+}
+
+// ---- rubble strength: tabulate a material's yield surface ----------------
+
+struct StrengthArgs {
+  std::string material;
+  std::string p, damage = "0:1:3", u = "0:0:1";
+  std::string format = "table";
+  std::vector<std::string> sets;
+};
+
+// The largest sqrt(J2) of the material's yield surface over (p, D, u)
+// (physics/plasticity.hpp: yield_limit_sqrt_j2, the limit the return
+// enforces; the Collins surface reads D and u).
+int strength_command(const StrengthArgs& args) {
+  const std::vector<double> p = parse_range(args.p, "--p", true, true);
+  const std::vector<double> damage = parse_range(args.damage, "--damage", true);
+  const std::vector<double> u = parse_range(args.u, "--u", true);
+  if (damage.back() > 1) throw rubble::InputError("--damage", "", "damage lies in [0, 1], got up to " + args.damage);
+  if (double(p.size()) * double(damage.size()) * double(u.size()) > 1e7)
+    throw rubble::InputError("--p/--damage/--u", "", "more than the 1e7 rows a table may have; use fewer points");
+  const rubble::MaterialConfig m = rubble::load_material(args.material, args.sets);
+  if (m.plasticity.model == rubble::PlasticityModel::None)
+    throw rubble::InputError(m.library_file.empty() ? args.material : m.library_file, "plasticity",
+                             "the material has no yield surface to tabulate (no [plasticity] table)");
+  const rubble::PlasticityParams pp = rubble::plasticity_params_from_config(m.plasticity);
+  const bool csv = args.format == "csv";
+  if (csv) {
+    std::printf("p,damage,u,sqrt_J2_max\n");
+  } else {
+    std::printf("# %s: yield surface, from %s\n# source: %s\n", m.name.c_str(), m.library_file.c_str(),
+                m.source.c_str());
+    std::printf("# sqrt_J2_max: the largest sqrt(J2) it admits (von Mises: Y/sqrt(3)); p [Pa], u [J/kg]\n");
+    std::printf("%15s %8s %15s %15s\n", "p", "damage", "u", "sqrt_J2_max");
+  }
+  for (double e : u)
+    for (double d : damage)
+      for (double q : p) {
+        const double y = double(rubble::yield_limit_sqrt_j2(pp, rubble::Real(q), rubble::Real(d), rubble::Real(e)));
+        if (csv) std::printf("%.17g,%.17g,%.17g,%.17g\n", q, d, e, y);
+        else std::printf("%15.7e %8.4f %15.7e %15.7e\n", q, d, e, y);
+      }
+  return std::fflush(stdout) == 0 ? 0 : 1;
 }
 
 // The regime, plus the add-ons that changed the value: compressed,
@@ -369,11 +413,29 @@ int main(int argc, char** argv) {
                   "Override a material key, e.g. --set tillotson.A=3e10 or --set rho_limit=0.9 (repeatable)")
       ->allow_extra_args(false);
 
+  StrengthArgs strength_args;
+  CLI::App* strength = app.add_subcommand(
+      "strength", "Tabulate a material's yield surface, the largest sqrt(J2) over pressure, damage and u "
+                  "(docs/user-guide.md)");
+  strength->add_option("MATERIAL", strength_args.material,
+                       "A library material (reference_data/materials/NAME.toml, or $RUBBLE_MATERIALS) or a file NAME.toml")
+      ->required();
+  strength->add_option("--p", strength_args.p, "Pressures A:B:N (may be negative: tension) or A:B:N:log")->required();
+  strength->add_option("--damage", strength_args.damage, "Damage values A:B:N in [0, 1]")->capture_default_str();
+  strength->add_option("--u", strength_args.u, "Specific internal energies C:D:M")->capture_default_str();
+  strength->add_option("--format", strength_args.format, "Output: an aligned table or CSV")
+      ->check(CLI::IsMember({"table", "csv"}))
+      ->capture_default_str();
+  strength->add_option("--set", strength_args.sets,
+                       "Override a material key, e.g. --set plasticity.cohesion=1e7 (repeatable)")
+      ->allow_extra_args(false);
+
   // CLI11 would only say that a subcommand is required: name the word.
   if (argc > 1 && argv[1][0] != '-') {
     const std::string word = argv[1];
-    if (word != "run" && word != "eos" && word != "info") {
-      std::cerr << "rubble: error: unknown command '" << word << "'; expected run, eos or info (rubble --help)\n";
+    if (word != "run" && word != "eos" && word != "strength" && word != "info") {
+      std::cerr << "rubble: error: unknown command '" << word
+                << "'; expected run, eos, strength or info (rubble --help)\n";
       return 2;
     }
   }
@@ -386,6 +448,7 @@ int main(int argc, char** argv) {
   try {
     if (*run) return run_command(run_args);
     if (*eos) return eos_command(eos_args);
+    if (*strength) return strength_command(strength_args);
     return info_command();
   } catch (const rubble::InputError& e) {
     std::cerr << "rubble: error: " << e.what() << "\n";

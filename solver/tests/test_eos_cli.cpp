@@ -263,3 +263,47 @@ TEST_F(eos_cli, NonFiniteStatesAreFlaggedAndHugeTablesRefused) {
   EXPECT_NE(r.err.find(std::to_string(flagged) + " of 4 states give a non-finite"), std::string::npos) << r.err;
   expect_usage_error("eos basalt --rho 1:2:10000 --u 0:1:10000", "more than the 1e7 rows");
 }
+
+// `rubble strength MATERIAL --p A:B:N [--damage A:B:N] [--u C:D:M]`: the
+// yield surface the return enforces (plasticity.hpp: yield_limit_sqrt_j2),
+// here basalt_collins' Collins curves: Y_0 and Y_d0 at p = 0, Y_M far out,
+// zero beyond the intact curve's tensile zero, and the von Mises limit
+// Y/sqrt(3) of basalt_brittle. Bad input names the option.
+TEST_F(eos_cli, StrengthTabulatesTheYieldSurface) {
+  const Result r = rubble("strength basalt_collins --p -2e7:1e12:3 --damage 0:1:2 --format csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> rows = lines_of(r.out);
+  ASSERT_EQ(rows.size(), 7u) << r.out;
+  EXPECT_EQ(rows[0], "p,damage,u,sqrt_J2_max");
+  const rubble::PlasticityParams pp =
+      rubble::plasticity_params_from_config(rubble::load_material("basalt_collins").plasticity);
+  int checked = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const std::vector<std::string> c = split(rows[i], ',');
+    ASSERT_EQ(c.size(), 4u) << rows[i];
+    const double p = std::stod(c[0]), d = std::stod(c[1]), y = std::stod(c[3]);
+    EXPECT_DOUBLE_EQ(y, rubble::collins_yield_strength(pp, p, d, 0)) << rows[i];
+    if (p == -2e7) {
+      EXPECT_EQ(y, 0.0) << "beyond the tensile zero -Y0 (Y_M - Y0)/(mu_i Y_M) = -1.42e7 Pa";
+    }
+    if (p == 1e12 && d == 0) {
+      EXPECT_NEAR(y, 3.5e9, 0.01 * 3.5e9) << "towards Y_M";
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 6);
+  const Result zero = rubble("strength basalt_collins --p 0:0:1 --damage 0:1:2 --format csv");
+  ASSERT_EQ(zero.code, 0) << zero.err;
+  EXPECT_NE(zero.out.find("0,0,0,20000000\n"), std::string::npos) << zero.out;  // Y_0
+  EXPECT_NE(zero.out.find("0,1,0,10000\n"), std::string::npos) << zero.out;     // Y_d0
+  const Result vm = rubble("strength basalt_brittle --p 0:1e9:2 --damage 0:0:1 --format csv");
+  ASSERT_EQ(vm.code, 0) << vm.err;
+  const std::vector<std::string> v = split(lines_of(vm.out)[1], ',');
+  EXPECT_NEAR(std::stod(v[3]), 3.5e9 / std::sqrt(3.0), 1.0);  // von Mises: sqrt(3 J2) <= Y
+  const Result table = rubble("strength granite_collins --p 0:1e9:3");
+  ASSERT_EQ(table.code, 0) << table.err;
+  EXPECT_NE(table.out.find("# source:"), std::string::npos) << table.out;
+  expect_usage_error("strength basalt --p 0:1e9:3", "no yield surface");
+  expect_usage_error("strength basalt_collins --p 0:1e9:3 --damage 0:2:3", "--damage");
+  expect_usage_error("strength basalt_collins --p 1e9:0:3", "--p");
+}

@@ -233,6 +233,21 @@ RUBBLE_HD_INLINE Real dp_apex_pressure(const PlasticityParams& pp) {
   return -pp.k_c / (Real(3) * pp.alpha_phi);
 }
 
+// The largest sqrt(J2) the yield surface admits at pressure p (with damage
+// D and specific internal energy u, which only the Collins surface reads):
+// von Mises Y/sqrt(3); Drucker–Prager k_c - alpha_phi I1 = k_c + 3 alpha_phi p
+// (negative beyond the apex); Collins Y(p, D, u); +infinity without
+// plasticity. What `rubble strength` tabulates.
+RUBBLE_HD_INLINE Real yield_limit_sqrt_j2(const PlasticityParams& pp, Real p, Real damage = 0, Real u = 0) {
+  switch (pp.model) {  // no default: a new model is a compiler warning here
+    case PlasticityModel::VonMises: return pp.yield_stress / std::sqrt(Real(3));
+    case PlasticityModel::DruckerPrager: return pp.k_c - pp.alpha_phi * (Real(-3) * p);
+    case PlasticityModel::Collins: return collins_yield_strength(pp, p, damage, u);
+    case PlasticityModel::None: break;
+  }
+  return Real(INFINITY);
+}
+
 // Yield function value (> 0 means outside), J2 the full 3-D invariant and
 // I1 = -3p; damage D and specific internal energy u enter the Collins
 // surface only. For PlasticityModel::None it returns -1 (never yields).
@@ -241,12 +256,9 @@ RUBBLE_HD_INLINE Real yield_function(const PlasticityParams& pp, const Mat<D>& S
                                      Real u = 0) {
   const Real j2 = deviatoric_j2(S);
   switch (pp.model) {  // no default: a new model is a compiler warning here
-    case PlasticityModel::Collins: return std::sqrt(j2) - collins_yield_strength(pp, p, damage, u);
+    case PlasticityModel::Collins: return std::sqrt(j2) - yield_limit_sqrt_j2(pp, p, damage, u);
     case PlasticityModel::VonMises: return std::sqrt(Real(3) * j2) - pp.yield_stress;
-    case PlasticityModel::DruckerPrager: {
-      const Real I1 = Real(-3) * p;
-      return std::sqrt(j2) + pp.alpha_phi * I1 - pp.k_c;
-    }
+    case PlasticityModel::DruckerPrager: return std::sqrt(j2) - yield_limit_sqrt_j2(pp, p);
     case PlasticityModel::None: break;
   }
   return Real(-1);
@@ -308,7 +320,7 @@ RUBBLE_HD_INLINE PlasticReturn<D> plastic_return(const PlasticityParams& pp, con
   switch (pp.model) {  // no default: a new model is a compiler warning here
     case PlasticityModel::None: return r;
     case PlasticityModel::Collins: {
-      const Real Y = collins_yield_strength(pp, p, damage, u);
+      const Real Y = yield_limit_sqrt_j2(pp, p, damage, u);
       const Real sj2 = std::sqrt(deviatoric_j2(S));
       if (sj2 > Y) {
         r.S = S * (Y / sj2);
@@ -326,7 +338,7 @@ RUBBLE_HD_INLINE PlasticReturn<D> plastic_return(const PlasticityParams& pp, con
     }
     case PlasticityModel::DruckerPrager: {
       // (1) tension cracking; the cap -alpha_phi I1 + k_c is then exactly 0
-      Real cap = -pp.alpha_phi * (Real(-3) * p) + pp.k_c;
+      Real cap = yield_limit_sqrt_j2(pp, p);
       if (cap < Real(0)) {
         r.p = dp_apex_pressure(pp);
         if (K > Real(0)) r.deps_crack = (r.p - p) / K;
