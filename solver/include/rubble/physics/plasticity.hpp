@@ -167,7 +167,10 @@ inline PlasticityParams collins_params(Real cohesion, Real friction_intact, Real
 // Y is a limit on sqrt(J2) (the convention of miluphcuda's
 // COLLINS_PLASTICITY, "Drucker-Prager-like -> compare to sqrt(J2)", of the
 // iSALE-lineage code SALEc, of SWIFT and of OpenSPH; Spheral alone applies
-// it to sqrt(3 J2)). p is the pressure that acts (compression > 0).
+// it to sqrt(3 J2)). p is the pressure of the intact material (compression
+// > 0): in compression the one that acts; in tension a damaged particle's
+// acting (1 - D) p is turned back into it by the caller
+// (plastic_return_particle), so Y_i sees the intact skeleton's tension.
 //
 //  intact (Lundborg 1968, Collins eq. 3):
 //    Y_i(p) = Y_0 + mu_i p / (1 + mu_i p / (Y_M - Y_0))
