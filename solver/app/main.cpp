@@ -295,6 +295,7 @@ std::string regime_label(const rubble::EosState& s) {
   if (s.limited & rubble::kEosPressureFloor) r += "+p_min";
   if (s.limited & rubble::kEosSoundSpeedFloor) r += "+c2_floor";
   if (s.limited & rubble::kEosMinSoundSpeed) r += "+cs_min";
+  if (s.limited & rubble::kEosEnergyFloor) r += "+u_floor";
   return r;
 }
 

@@ -28,7 +28,7 @@ std::string ConservedLog::header(int dimension) {
   std::string h = "time,step,dt,mass";
   for (int k = 0; k < dimension; ++k) h += std::string(",momentum_") + kAxis[k];
   for (int k : angular_components(dimension)) h += std::string(",angular_momentum_") + kAxis[k];
-  h += ",kinetic,internal,gravitational,total";
+  h += ",kinetic,internal,gravitational,total,wall_work,floor_energy,booked_total";
   return h;
 }
 
@@ -96,6 +96,9 @@ void ConservedLog::append(const ConservedRecord& r) {
   put(r.internal);
   put(r.gravitational);
   put(r.total);
+  put(r.wall_work);
+  put(r.floor_energy);
+  put(r.booked_total);
   line += '\n';
   if (std::fputs(line.c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
     throw std::runtime_error("conserved log '" + path_ + "': write failed: " + std::strerror(errno));
@@ -124,6 +127,7 @@ ConservedRecord conserved_record(const ConservedSums& sum, double time, std::int
   r.internal = sum.internal;
   r.gravitational = sum.gravitational;
   r.total = r.kinetic + r.internal + r.gravitational;
+  r.booked_total = r.total;
   return r;
 }
 

@@ -57,12 +57,14 @@ struct LoopStart {
   int next_snapshot = 0;    // number of the next NAME.NNNN.h5
   bool resumed = false;
   std::filesystem::path from_dir;  // the restart snapshot's directory
+  EnergyBooks books;               // the energy bookkeeping so far
 };
 
 // The loop's own state beyond the particles, as a snapshot records it.
 struct LoopState {
   double dt_proposal = 0;
   double next_output = 0;
+  EnergyBooks books;  // the stepper's, as of the snapshot
 };
 
 // One run at a time per output directory: an exclusive flock() on
@@ -211,6 +213,7 @@ class OutputWriter {
     r.overrides = scene_.overrides;
     r.libraries = scene_.libraries;
     r.body_first_id = body_first_;
+    r.books = loop.books;
     return r;
   }
 
@@ -329,11 +332,16 @@ struct Fault {
   int fault = kStateOk;
   std::size_t index = 0;
 };
+// `materials`: the run's (the internal-energy floor of each EOS).
 template <int D>
-Fault find_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first) {
+Fault find_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
+                 const std::vector<MaterialParams>& materials) {
   const StoreView<D> s = const_cast<ParticleStore<D>&>(ps).view();  // read only
+  RhsContext<D> c;
+  c.s = s;
+  c.mat = materials.data();
   for (std::size_t i = 0; i < ps.n; ++i) {
-    const int fault = particle_fault<D>(s, std::uint32_t(i));
+    const int fault = particle_fault<D>(s, std::uint32_t(i), u_min_particle<D>(c, std::uint32_t(i)));
     if (fault == kStateOk) continue;
     return Fault{describe_particle<D>(ps, i, body_first),
                  std::string("invalid ") + state_fault_field(fault) + " (" + fault_value<D>(ps, i, fault) +
@@ -344,9 +352,10 @@ Fault find_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& bo
 }
 
 template <int D>
-std::string first_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first, int* fault_out = nullptr,
+std::string first_fault(const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first,
+                        const std::vector<MaterialParams>& materials, int* fault_out = nullptr,
                         std::size_t* index_out = nullptr) {
-  const Fault f = find_fault<D>(ps, body_first);
+  const Fault f = find_fault<D>(ps, body_first, materials);
   if (fault_out) *fault_out = f.fault;
   if (index_out) *index_out = f.index;
   return f.particle.empty() ? std::string() : f.problem + " in " + f.particle;
@@ -358,7 +367,7 @@ template <int D>
 void check_initial_state(const Scene& scene, const ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first) {
   int fault = kStateOk;
   std::size_t i = 0;
-  const std::string what = first_fault<D>(ps, body_first, &fault, &i);
+  const std::string what = first_fault<D>(ps, body_first, material_params_from_scene(scene), &fault, &i);
   if (what.empty()) return;
   const std::size_t body = body_of_id(body_first, ps.id[i]);
   const BodyConfig& b = scene.bodies[body];
@@ -391,6 +400,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
     if (out.enabled()) out.log(sys.conserved(t, step, 0));
   } else {
+    sys.set_energy_books(start.books);
     loop.dt_proposal = start.dt_proposal;
     // an end_time extended on resuming moves the next output past t
     loop.next_output = std::min(start.next_output, t_end);
@@ -412,13 +422,17 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   // neighbour search's own words, which name an internal array index).
   double good_t = t;
   std::int64_t good_step = step;
-  auto fail = [&](const std::string& cause, const std::string& when) {
-    const Fault f = find_fault<D>(sys.host(), body_first);
+  const std::vector<MaterialParams> materials = material_params_from_scene(scene);
+  // "; the last good state (...) is in FILE", after writing it
+  auto last_good_note = [&] {
     const std::string file = out.diagnostic(sys.last_good(), good_t, good_step);
-    const std::string where =
-        file.empty() ? std::string()
-                     : "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) +
-                           ") is in " + file;
+    return file.empty() ? std::string()
+                        : "; the last good state (t = " + fmt_g(good_t) + " s, step " + std::to_string(good_step) +
+                              ") is in " + file;
+  };
+  auto fail = [&](const std::string& cause, const std::string& when) {
+    const Fault f = find_fault<D>(sys.host(), body_first, materials);
+    const std::string where = last_good_note();
     if (f.particle.empty()) return RunError(cause + " " + when + where);
     return RunError(f.particle + ", " + when + ": " + f.problem + " (" + cause + ")" + where);
   };
@@ -490,6 +504,15 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
           dt = r.dt_taken;
           loop.dt_proposal = r.dt_next;
         }
+      } catch (const EnergyJumpError& e) {
+        // the energy watchdog: the particles that gained the most, as they are after the step
+        std::string who;
+        const ParticleStore<D>& now = sys.host();
+        for (std::size_t k = 0; k < e.particles.size(); ++k)
+          who += (k ? "; " : "") + describe_particle<D>(now, e.particles[k], body_first) + " gained " +
+                 fmt_g(e.gains[k]) + " J";
+        throw RunError("in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s, " + e.what() +
+                       "; the particles that gained the most: " + who + last_good_note());
       } catch (const RunError& e) {
         // inside the step: the neighbour search or the smoothing-length iteration
         throw fail(e.what(), "in step " + std::to_string(step + 1) + " from t = " + fmt_g(t) + " s");
@@ -524,6 +547,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
         out.log(sys.conserved(t, step, dt));
       if (output_time) {
         loop.next_output = std::min(loop.next_output + out_interval, t_end);
+        loop.books = sys.energy_books();
         if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
       }
       t_output += since(t0);
@@ -535,6 +559,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       if (g_stop_signal != 0) stopped = g_stop_signal == SIGINT ? "SIGINT" : g_stop_signal == SIGTERM ? "SIGTERM" : "a signal";
       else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
         stopped = "the wall-time limit";
+      loop.books = sys.energy_books();
       if (!stopped.empty()) {
         t0 = Clock::now();
         checkpoint = out.checkpoint(sys.host(), t, step, loop);
@@ -592,6 +617,16 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   if (sim.kernel_correction && sys.solid() && !opt.quiet)
     std::fprintf(stderr, "kernel-gradient correction: %lld of %lld particle evaluations fell back to the identity\n",
                  static_cast<long long>(fs.correction_fallbacks), static_cast<long long>(fs.particle_evaluations));
+  fs.books = sys.energy_books();
+  fs.energy_retries = sys.energy_retries();
+  if (!opt.quiet && fs.books.floor_events > 0)
+    std::fprintf(stderr,
+                 "rubble: internal-energy floor: u was raised to 0 in %lld particle-steps, adding %g J "
+                 "(booked in conserved.csv: floor_energy)\n",
+                 static_cast<long long>(fs.books.floor_events), fs.books.floor_energy);
+  if (!opt.quiet && fs.energy_retries > 0)
+    std::fprintf(stderr, "rubble: energy watchdog: %lld steps taken again with a shorter step\n",
+                 static_cast<long long>(fs.energy_retries));
   fs.stopped = stopped;
   fs.checkpoint = checkpoint;
   fs.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -643,6 +678,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     start.next_output = meta.restart.next_output;
     start.next_snapshot = meta.restart.next_snapshot;
     start.resumed = true;
+    start.books = meta.restart.books;
     start.from_dir = std::filesystem::path(opt.restart_from).parent_path();
     if (start.from_dir.empty()) start.from_dir = ".";
     body_first = meta.restart.body_first_id;

@@ -27,6 +27,7 @@ Features features_of_scene(const Scene& scene) {
     on.viscosity_switch = on.viscosity_switch || m.viscosity.switch_on;
     on.artificial_stress = on.artificial_stress || (solid && m.artificial_stress.enabled && m.artificial_stress.n > 0);
     on.stress_diffusion = on.stress_diffusion || (solid && m.stress_diffusion > 0);
+    on.energy_floor = on.energy_floor || eos_has_energy_floor(eos_params_from_material(m));
   }
   for (const BodyConfig& b : scene.bodies) {
     const bool wall = b.boundary != BoundaryKind::None;
@@ -125,6 +126,8 @@ RunPhysics run_physics(const Scene& scene) {
   r.h_tolerance = h_iteration_tolerance(sim.h_tolerance);
   r.xsph_epsilon = Real(sim.xsph);
   r.shifting = Real(sim.shifting);
+  r.density_step_fraction = Real(sim.density_step_fraction);
+  r.energy_step_tolerance = sim.energy_step_tolerance >= 0 ? sim.energy_step_tolerance : sim.courant * sim.courant;
   for (int k = 0; k < 3; ++k) r.body_force[k] = Real(sim.gravity[k]);
   r.gravity = scene.gravity;
   return r;

@@ -397,7 +397,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "h_tolerance", "rk2_tolerance", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
+              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
               "kernel_correction", "stress_update", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
@@ -437,6 +437,14 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (auto x = number(*t, "rk2_tolerance", p)) {
     require(*x > 0, *t, "rk2_tolerance", p, *x, "> 0");
     s.rk2_tolerance = *x;
+  }
+  if (auto x = number(*t, "energy_step_tolerance", p)) {
+    require(*x >= 0 && *x <= 1, *t, "energy_step_tolerance", p, *x, "in [0, 1] (0 = off; default courant^2)");
+    s.energy_step_tolerance = *x;
+  }
+  if (auto x = number(*t, "density_step_fraction", p)) {
+    require(*x >= 0 && *x <= 1, *t, "density_step_fraction", p, *x, "in [0, 1] (0 = no limit; default 0.1)");
+    s.density_step_fraction = *x;
   }
   if (auto x = number(*t, "dt_initial", p)) {
     require(*x >= 0 && *x <= s.end_time, *t, "dt_initial", p, *x, ">= 0 and <= end_time (0 = automatic)");

@@ -15,7 +15,7 @@ namespace rubble {
 namespace {
 
 // Bumped whenever the restart group changes incompatibly.
-constexpr int kRestartFormat = 1;
+constexpr int kRestartFormat = 2;  // 2: the energy books (issue #50)
 
 // ---- errors ----------------------------------------------------------------
 
@@ -291,6 +291,10 @@ void write_restart_group(hid_t h5, const std::string& file, const ParticleStore<
   write_attr(g.get(), file, "next_output", H5T_NATIVE_DOUBLE, &r.next_output);
   write_attr(g.get(), file, "next_snapshot", H5T_NATIVE_INT, &r.next_snapshot);
   write_attr(g.get(), file, "checkpoint", H5T_NATIVE_INT, &checkpoint);
+  write_attr(g.get(), file, "wall_work", H5T_NATIVE_DOUBLE, &r.books.wall_work);
+  write_attr(g.get(), file, "floor_energy", H5T_NATIVE_DOUBLE, &r.books.floor_energy);
+  write_attr(g.get(), file, "floor_events", H5T_NATIVE_INT64, &r.books.floor_events);
+  write_attr(g.get(), file, "wall_power", H5T_NATIVE_DOUBLE, &r.books.wall_power);
   write_string_attr(g.get(), file, "scene_file", r.scene_file);
   write_string_attr(g.get(), file, "scene_source", r.scene_source);
   const int n_overrides = static_cast<int>(r.overrides.size()), n_libraries = static_cast<int>(r.libraries.size());
@@ -343,6 +347,10 @@ RestartState read_restart_attributes(hid_t g, const std::string& path) {
   read_attr(g, path, "next_snapshot", H5T_NATIVE_INT, &r.next_snapshot);
   read_attr(g, path, "checkpoint", H5T_NATIVE_INT, &checkpoint);
   r.checkpoint = checkpoint != 0;
+  read_attr(g, path, "wall_work", H5T_NATIVE_DOUBLE, &r.books.wall_work);
+  read_attr(g, path, "floor_energy", H5T_NATIVE_DOUBLE, &r.books.floor_energy);
+  read_attr(g, path, "floor_events", H5T_NATIVE_INT64, &r.books.floor_events);
+  read_attr(g, path, "wall_power", H5T_NATIVE_DOUBLE, &r.books.wall_power);
   r.scene_file = read_string_attr(g, path, "scene_file");
   r.scene_source = read_string_attr(g, path, "scene_source");
   read_attr(g, path, "overrides", H5T_NATIVE_INT, &n_overrides);

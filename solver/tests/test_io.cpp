@@ -556,12 +556,12 @@ TEST(Xdmf, Errors) {
 // ---- conserved.csv -----------------------------------------------------------------
 
 TEST(ConservedLog, HeaderByDimension) {
-  EXPECT_EQ(ConservedLog::header(1), "time,step,dt,mass,momentum_x,kinetic,internal,gravitational,total");
-  EXPECT_EQ(ConservedLog::header(2),
-            "time,step,dt,mass,momentum_x,momentum_y,angular_momentum_z,kinetic,internal,gravitational,total");
+  const std::string energy = "kinetic,internal,gravitational,total,wall_work,floor_energy,booked_total";
+  EXPECT_EQ(ConservedLog::header(1), "time,step,dt,mass,momentum_x," + energy);
+  EXPECT_EQ(ConservedLog::header(2), "time,step,dt,mass,momentum_x,momentum_y,angular_momentum_z," + energy);
   EXPECT_EQ(ConservedLog::header(3),
             "time,step,dt,mass,momentum_x,momentum_y,momentum_z,angular_momentum_x,angular_momentum_y,"
-            "angular_momentum_z,kinetic,internal,gravitational,total");
+            "angular_momentum_z," + energy);
 }
 
 TEST(ConservedLog, RowsMatchHeaderAtFullPrecision) {
@@ -583,6 +583,7 @@ TEST(ConservedLog, RowsMatchHeaderAtFullPrecision) {
     r.internal = 8;
     r.gravitational = -9;
     r.total = 6;
+    r.book(0.5, 0.25);
     {
       ConservedLog log(path, dim);
       log.append(r);
@@ -597,7 +598,7 @@ TEST(ConservedLog, RowsMatchHeaderAtFullPrecision) {
     const auto names = split(lines[0], ',');
     const auto values = split(lines[1], ',');
     ASSERT_EQ(values.size(), names.size()) << dim << "-D";
-    EXPECT_EQ(names.size(), 8u + dim + (dim == 2 ? 1 : dim == 3 ? 3 : 0));
+    EXPECT_EQ(names.size(), 11u + dim + (dim == 2 ? 1 : dim == 3 ? 3 : 0));
     auto value = [&](const std::string& name) {
       for (std::size_t k = 0; k < names.size(); ++k)
         if (names[k] == name) return std::strtod(values[k].c_str(), nullptr);
@@ -620,6 +621,9 @@ TEST(ConservedLog, RowsMatchHeaderAtFullPrecision) {
     }
     EXPECT_EQ(value("gravitational"), -9);
     EXPECT_EQ(value("total"), 6);
+    EXPECT_EQ(value("wall_work"), 0.5);
+    EXPECT_EQ(value("floor_energy"), 0.25);
+    EXPECT_EQ(value("booked_total"), 5.25);  // total - wall_work - floor_energy
   }
 }
 

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "rubble/io/conserved_sums.hpp"
 #include "rubble/scene/scene.hpp"
 #include "rubble/scene/scene_parser.hpp"
 
@@ -127,6 +128,11 @@ struct FinalState {
   // snapshot to resume from.
   std::string stopped;
   std::string checkpoint;
+  // The energy bookkeeping (drivers/step_sequence.hpp): the work of walls and
+  // the internal-energy floor's additions, and the steps the energy watchdog
+  // took again with a shorter step.
+  EnergyBooks books;
+  std::int64_t energy_retries = 0;
 };
 
 // Run the scene to its end time. Throws InputError for bad input found while

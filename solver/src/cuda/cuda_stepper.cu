@@ -1036,7 +1036,24 @@ ConservedRecord CudaStepper<D>::conserved(double t, std::int64_t step, double dt
   const ConservedSums sum = reduce_index<ConservedSums>(
       impl_->backend.temp, impl_->n(), [=] __device__(std::size_t i) { return conserved_particle<D>(s, i, g); },
       ConservedSums{}, thrust::plus<ConservedSums>());
-  return conserved_record(sum, t, step, dt);
+  ConservedRecord r = conserved_record(sum, t, step, dt);
+  r.book(impl_->steps.energy_books().wall_work, impl_->steps.energy_books().floor_energy);
+  return r;
+}
+
+template <int D>
+const EnergyBooks& CudaStepper<D>::energy_books() const {
+  return impl_->steps.energy_books();
+}
+
+template <int D>
+void CudaStepper<D>::set_energy_books(const EnergyBooks& b) {
+  impl_->steps.set_energy_books(b);
+}
+
+template <int D>
+std::int64_t CudaStepper<D>::energy_retries() const {
+  return impl_->steps.energy_retries();
 }
 
 template <int D>

@@ -42,6 +42,10 @@ class CudaStepper {
   void damp(double f);
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
+  // The energy bookkeeping (StepSequence): books, watchdog retries.
+  const EnergyBooks& energy_books() const;
+  void set_energy_books(const EnergyBooks& b);
+  std::int64_t energy_retries() const;
   const ParticleStore<D>& host();  // downloads the device state into ps
   // The state check's last good state: the snapshot fields copied on the
   // device before each step (no host traffic), downloaded by last_good()

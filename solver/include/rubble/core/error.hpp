@@ -1,6 +1,7 @@
 #pragma once
 // Errors a user can act on. InputError names the file, the key and the
 // problem; the command-line program prints what() and exits non-zero.
+#include <cstddef>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,20 @@ class RunError : public std::runtime_error {
   // empty for a failure before the loop
   std::vector<std::pair<std::string, double>> phase_seconds;
   double wall_seconds = 0;
+};
+
+// The energy watchdog stopped the run (issue #50 item 1): one step changed
+// the booked total energy by more than its bound and the integrator could not
+// retry it with a smaller step. The particles that gained the most, by index
+// in the store as it is after the step, with their gains [J].
+class EnergyJumpError : public RunError {
+ public:
+  EnergyJumpError(const std::string& what, double change, double bound, std::vector<std::size_t> particles,
+                  std::vector<double> gains)
+      : RunError(what), change(change), bound(bound), particles(std::move(particles)), gains(std::move(gains)) {}
+  double change, bound;
+  std::vector<std::size_t> particles;
+  std::vector<double> gains;
 };
 
 // Output that could not be written (an unwritable or full disk, a

@@ -131,8 +131,14 @@ class CpuStepper {
   // Index of the first particle with a non-finite state, or n.
   std::size_t first_non_finite() { return steps_.check_state().first_bad; }
   ConservedRecord conserved(double t, std::int64_t step, double dt) const {
-    return measure_conserved<D>(ps_, t, step, dt, g_);
+    ConservedRecord r = measure_conserved<D>(ps_, t, step, dt, g_);
+    r.book(steps_.energy_books().wall_work, steps_.energy_books().floor_energy);
+    return r;
   }
+  // The energy bookkeeping (StepSequence): books, watchdog retries.
+  const EnergyBooks& energy_books() const { return steps_.energy_books(); }
+  void set_energy_books(const EnergyBooks& b) { steps_.set_energy_books(b); }
+  std::int64_t energy_retries() const { return steps_.energy_retries(); }
   const ParticleStore<D>& host() const { return ps_; }  // the state, on the host
   // The state check's last good state: the snapshot fields as they were
   // before the step, written to NAME.failed.h5 when the step fails. Those a

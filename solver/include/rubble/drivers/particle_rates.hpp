@@ -61,6 +61,7 @@ struct RhsContext {
   const SolidInverses* solid_inv = nullptr;
   Real xsph_epsilon = 0;
   Real courant = 0, force_factor = 0;
+  Real density_step_fraction = 0;  // continuity density: the step's largest |d rho|/rho (0: none)
   // summation density: |dh|/h of the Newton iteration (h_iteration_tolerance)
   Real h_tolerance = h_iteration_tolerance(0);
   Vec<D> body_force = Vec<D>::zero();  // uniform external acceleration (simulation.gravity)
@@ -870,6 +871,44 @@ RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32
   if (s.ddamage_root_dt) s.ddamage_root_dt[a] = 0;
 }
 
+// The power the held particles put into the rest (the energy watchdog's
+// booked work of walls, drivers/step_sequence.hpp), from particle a's
+// rates before hold_boundary_particle zeroes them. A pair's forces and
+// heating conserve m_a (v_a.dv_a + du_a) + m_b (v_b.dv_b + du_b) whatever
+// pressures they use (extrapolated walls too); a held particle b keeps its
+// velocity and (unless evolving) its u, so what it would have gained,
+// m_b (v_b.dv_b/dt + du_b/dt), went into the others: their gain is minus
+// that. The body force on held particles is left out (their potential
+// energy is not counted either, conserved_sums.hpp). 0 for free particles.
+template <int D>
+RUBBLE_HD_INLINE double wall_power_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (s.boundary[a] == kFreeParticle) return 0;
+  const Vec<D> dv = c.has_body_force ? s.dvdt[a] - c.body_force : s.dvdt[a];
+  double held = double(dot(s.v[a], dv));
+  if (s.boundary[a] != kBoundaryEvolving) held += double(s.dudt[a]);
+  return -double(s.m[a]) * held;
+}
+
+// The lowest u particle a's EOS admits (the state check's bound): its
+// internal-energy floor, -infinity where it has none (eos.hpp).
+template <int D>
+RUBBLE_HD_INLINE Real u_min_particle(const RhsContext<D>& c, std::uint32_t a) {
+  return eos_has_energy_floor(c.mat[c.s.material_id[a]].eos) ? kInternalEnergyFloor : Real(-INFINITY);
+}
+
+// The internal-energy floor after a step (issue #50 item 2; eos.hpp): u
+// below its EOS's floor is raised to it. Returns the energy added, m du
+// (booked by the caller).
+template <int D>
+RUBBLE_HD_INLINE double energy_floor_particle(const RhsContext<D>& c, std::uint32_t a) {
+  const StoreView<D>& s = c.s;
+  if (!(s.u[a] < kInternalEnergyFloor) || !eos_has_energy_floor(c.mat[s.material_id[a]].eos)) return 0;
+  const double added = double(s.m[a]) * (double(kInternalEnergyFloor) - double(s.u[a]));
+  s.u[a] = kInternalEnergyFloor;
+  return added;
+}
+
 // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp),
 // within a material only (not across a contact between bodies of different
 // materials); boundary particles get none.
@@ -939,6 +978,18 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
   if (s.dalphadt) {
     const Real dt_a = porosity_dt_limit(s.alpha[a], s.dalphadt[a], kAlphaStepFraction);
     dt = dt_a < dt ? dt_a : dt;
+  }
+  // continuity density: |d rho| <= density_step_fraction rho per step. An
+  // explicit update rho + dt d rho/dt goes negative once dt |div v| exceeds
+  // 1, which the Courant limit does not prevent where material expands into
+  // vacuum faster than its sound speed (the Einfeldt 1-2-0-3 rarefaction:
+  // test_energy_watchdog, Vapour.*). miluphcuda limits its step the same
+  // way, SAFETY_FIRST (|rho| + rho_min) / |d rho/dt| with SAFETY_FIRST = 0.1
+  // in its Euler and Heun schemes (src/predictor_corrector_euler.cu,
+  // coupled_heun_rk4_sph_nbody.cu): the default (issue #50 item 3).
+  if (s.drhodt && c.density_step_fraction > Real(0) && s.drhodt[a] != Real(0)) {
+    const Real dt_r = c.density_step_fraction * s.rho[a] / std::fabs(s.drhodt[a]);
+    dt = dt_r < dt ? dt_r : dt;
   }
   if (s.ddamage_root_dt) {
     const Real dt_d = damage_dt_limit_particle<D>(c, a);

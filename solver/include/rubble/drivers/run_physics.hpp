@@ -44,6 +44,10 @@ struct RunPhysics {
   Real h_tolerance = 0;   // summation density: |dh|/h of the Newton iteration
   Real xsph_epsilon = 0;  // 0: off
   Real shifting = 0;      // particle shifting coefficient A (0: off)
+  // the energy watchdog's bound per step, a fraction of the energy scale
+  // (simulation.energy_step_tolerance; its default courant^2; 0: off)
+  double energy_step_tolerance = 0;
+  Real density_step_fraction = 0;  // continuity density: simulation.density_step_fraction (0: no limit)
   Real body_force[3] = {0, 0, 0};  // simulation.gravity
   GravityConfig gravity;  // self-gravity ([gravity]; mode Off: none)
 };

@@ -5,7 +5,12 @@
 // particle a that is not (kStateOk if none); both backends call it, the
 // CUDA one inside a device reduction, so a step returns only an index.
 //
-//   x, v, u, dv/dt, du/dt, d rho/dt, dS/dt, d alpha/dt,
+//   u                                     finite, and >= u_min: the EOS's
+//                                         internal-energy floor where it has
+//                                         one (eos.hpp; after each step the
+//                                         floor is applied, so this catches
+//                                         initial and resumed states)
+//   x, v, dv/dt, du/dt, d rho/dt, dS/dt, d alpha/dt,
 //   S, eps_v, phi, a_grav, Omega          finite
 //   rho, h                                finite and > 0
 //   p                                     finite
@@ -71,6 +76,7 @@ inline const char* state_fault_requirement(int fault) {
     case kFaultSmoothingLength: return "finite and > 0";
     case kFaultSoundSpeed:
     case kFaultPlasticStrain: return "finite and >= 0";
+    case kFaultInternalEnergy: return "finite, and >= 0 where the EOS has the internal-energy floor";
     case kFaultDistention: return "finite and >= 1";
     default: return "finite";
   }
@@ -93,13 +99,14 @@ RUBBLE_HD_INLINE bool finite_mat(const Mat<D>& m) {
 
 // The first faulty field of particle a (kStateOk if none), in the order
 // of the table above: the evolved state before what is derived from it.
+// u_min: the floor of a's EOS (-infinity: none).
 template <int D>
-RUBBLE_HD_INLINE int particle_fault(const StoreView<D>& s, std::uint32_t a) {
+RUBBLE_HD_INLINE int particle_fault(const StoreView<D>& s, std::uint32_t a, Real u_min = -INFINITY) {
   if (!finite_vec<D>(s.x[a])) return kFaultPosition;
   if (!finite_vec<D>(s.v[a])) return kFaultVelocity;
   if (!(std::isfinite(s.rho[a]) && s.rho[a] > Real(0))) return kFaultDensity;
   if (!(std::isfinite(s.h[a]) && s.h[a] > Real(0))) return kFaultSmoothingLength;
-  if (!std::isfinite(s.u[a])) return kFaultInternalEnergy;
+  if (!(std::isfinite(s.u[a]) && s.u[a] >= u_min)) return kFaultInternalEnergy;
   if (s.S && !finite_mat<D>(s.S[a])) return kFaultStress;
   if (s.alpha && !(std::isfinite(s.alpha[a]) && s.alpha[a] >= Real(1))) return kFaultDistention;
   if (s.eps_p && !(std::isfinite(s.eps_p[a]) && s.eps_p[a] >= Real(0))) return kFaultPlasticStrain;
@@ -118,8 +125,8 @@ RUBBLE_HD_INLINE int particle_fault(const StoreView<D>& s, std::uint32_t a) {
 
 // Whether particle a passes the state check (the run stops otherwise).
 template <int D>
-RUBBLE_HD_INLINE bool finite_particle(const StoreView<D>& s, std::uint32_t a) {
-  return particle_fault<D>(s, a) == kStateOk;
+RUBBLE_HD_INLINE bool finite_particle(const StoreView<D>& s, std::uint32_t a, Real u_min = -INFINITY) {
+  return particle_fault<D>(s, a, u_min) == kStateOk;
 }
 
 }  // namespace rubble

@@ -34,10 +34,14 @@
 //   solid_forces_pair_once(c)        a backend's own pair loops (false:
 //                                    none, the gather loops here run)
 //   zero(array), read_count(array)   a counter set to 0, read on the host
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "rubble/core/atomic.hpp"
 #include "rubble/core/box.hpp"
@@ -48,6 +52,7 @@
 #include "rubble/drivers/state_check.hpp"
 #include "rubble/integrate/leapfrog.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
+#include "rubble/io/conserved_sums.hpp"
 #include "rubble/neighbors/search_radius.hpp"
 
 namespace rubble {
@@ -92,6 +97,35 @@ struct StateCheckMin {
 struct CountSum {
   RUBBLE_HD unsigned long long operator()(unsigned long long a, unsigned long long b) const { return a + b; }
 };
+struct DoubleSum {
+  RUBBLE_HD double operator()(double a, double b) const { return a + b; }
+};
+struct EnergySumOp {
+  RUBBLE_HD EnergySums operator()(const EnergySums& a, const EnergySums& b) const { return a + b; }
+};
+
+// The internal-energy floor's work in one pass: energy added and particles raised.
+struct FloorSums {
+  double energy;
+  unsigned long long count;
+};
+struct FloorSumOp {
+  RUBBLE_HD FloorSums operator()(const FloorSums& a, const FloorSums& b) const {
+    return {a.energy + b.energy, a.count + b.count};
+  }
+};
+
+// A particle's energy gain over a step, for the one that gained the most.
+struct Gain {
+  double gain;
+  std::uint32_t index;
+};
+struct GainMax {
+  RUBBLE_HD Gain operator()(const Gain& a, const Gain& b) const {
+    return a.gain > b.gain || (a.gain == b.gain && a.index < b.index) ? a : b;
+  }
+};
+
 
 // Every member function that holds a loop body is public: nvcc's extended
 // lambdas may not live in private member functions.
@@ -112,6 +146,7 @@ class StepSequence {
     if (on_.solid && on_.artificial_stress) art_R_.resize(n);
     fallbacks_.resize(1);
     be_.zero(fallbacks_);
+    energy_tolerance_ = physics.energy_step_tolerance;
   }
 
   // ---- what the integrators ask of a system (integrate/)
@@ -141,20 +176,152 @@ class StepSequence {
   }
 
   // ---- the time loop's interface
-  void sort_particles() { be_.sort(domain_); }
+  // Sorting permutes the particles: the watchdog's per-particle energies of
+  // the step's start are measured again before the next step.
+  void sort_particles() {
+    be_.sort(domain_);
+    energy_known_ = false;
+  }
+  // One leapfrog step. The energy watchdog cannot retry it (that would need
+  // a copy of the whole state kept every step): a step beyond its bound stops
+  // the run (EnergyJumpError).
   void leapfrog(Real dt) {
     dt_known_ = false;
+    const double p0 = books_.wall_power;
+    begin_step();
     leapfrog_step<D>(*this, dt, on_.staggered);
+    // the held particles' work with the kicks' weights: dt/2 at each end
+    const double work = on_.boundary ? 0.5 * double(dt) * (p0 + powers_.back()) : 0.0;
+    if (!energy_step_ok(work)) throw energy_jump(dt, 0);
   }
+  // One accepted rk2_adaptive step. A step the energy watchdog refuses is
+  // taken again from its start (the integrator's copy of y_n, rates
+  // included) with a quarter of the step, down to dt_min; there it stops the
+  // run (EnergyJumpError). The retries count as rejections.
   Rk2Result rk2(Real dt, Real tol, Real dt_min) {
-    dt_known_ = false;
-    return rk2_adaptive_step<D>(*this, dt, tol, dt_min);
+    int retries = 0;
+    for (;;) {
+      dt_known_ = false;
+      const double p0 = books_.wall_power;
+      begin_step();
+      Rk2Result r = rk2_adaptive_step<D>(*this, dt, tol, dt_min);
+      // Heun's weights: dt/2 on k1 (the step's start) and on k2, the
+      // accepted attempt's first evaluation (then k3 and the next k1)
+      const double work =
+          on_.boundary ? 0.5 * double(r.dt_taken) * (p0 + powers_[powers_.size() - 3]) : 0.0;
+      if (energy_step_ok(work)) {
+        r.rejections += retries;
+        return r;
+      }
+      if (r.dt_taken <= dt_min) throw energy_jump(r.dt_taken, retries);
+      restore_state(be_.integrator_scratch().y0);
+      books_.wall_power = p0;
+      ++energy_retries_;
+      ++retries;
+      dt = std::max(r.dt_taken / Real(4), dt_min);
+    }
   }
-  // Relaxation: every velocity times f.
+  // Relaxation: every velocity times f (energy leaves on purpose: the
+  // watchdog measures its start again).
   void damp(Real f) {
     dt_known_ = false;
+    energy_known_ = false;
     const StoreView<D> s = view();
     be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.v[i] *= f; });
+  }
+
+  // ---- energy bookkeeping (issue #50 items 1 and 2)
+  // The booked work of walls and of the internal-energy floor so far.
+  const EnergyBooks& energy_books() const { return books_; }
+  // A resumed run carries on its restart snapshot's books.
+  void set_energy_books(const EnergyBooks& b) { books_ = b; }
+  // Steps the watchdog refused and the integrator took again.
+  std::int64_t energy_retries() const { return energy_retries_; }
+  double energy_tolerance() const { return energy_tolerance_; }
+
+  Array<double>& e_start() { return e_[e_first_]; }
+  Array<double>& e_now() { return e_[1 - e_first_]; }
+
+  // The watchdog's sums of the current state (energy_sums_particle), each
+  // particle's energy into `into`.
+  template <class A>
+  EnergySums measure_energy(A& into) {
+    const std::size_t n = size();
+    into.resize(n);
+    double* e = into.data();
+    const StoreView<D> s = view();
+    const Vec<D> g = g_;
+    return be_.reduce(
+        n,
+        [=] RUBBLE_LAMBDA(std::uint32_t i) {
+          const EnergySums r = energy_sums_particle<D>(s, i, g);
+          e[i] = r.total;
+          return r;
+        },
+        EnergySums{}, EnergySumOp{});
+  }
+
+  // Before a step: this step's evaluations' wall powers and floor work start
+  // empty; the watchdog measures the step's start if it does not know it.
+  void begin_step() {
+    powers_.clear();
+    step_floor_ = FloorSums{0, 0};
+    if (energy_tolerance_ > 0 && !energy_known_) {
+      energy_start_ = measure_energy(e_start());
+      energy_known_ = true;
+    }
+  }
+
+  // After a step: whether the watchdog accepts it; if so the step's work is
+  // booked and its end becomes the next step's start. The booked total
+  // E - W_walls - E_floor may change by at most
+  //   energy_step_tolerance * max(scale at the start, scale at the end)
+  // (energy_sums_particle; docs/user-guide.md, "The energy watchdog"). A
+  // change that is not finite is left to the state check, which names the
+  // field.
+  bool energy_step_ok(double work) {
+    if (energy_tolerance_ > 0) {
+      const EnergySums now = measure_energy(e_now());
+      last_change_ = now.total - energy_start_.total - work - step_floor_.energy;
+      last_bound_ = energy_tolerance_ * std::max(energy_start_.scale, now.scale);
+      if (std::isfinite(last_change_) && std::fabs(last_change_) > last_bound_) return false;
+      energy_start_ = now;
+      e_first_ = 1 - e_first_;  // the end's energies are the next start's
+    }
+    books_.wall_work += work;
+    books_.floor_energy += step_floor_.energy;
+    books_.floor_events += std::int64_t(step_floor_.count);
+    return true;
+  }
+
+  // The watchdog's stop: the step's change and bound, and the three
+  // particles that gained the most over it.
+  EnergyJumpError energy_jump(Real dt, int retries) {
+    const std::size_t n = size();
+    const double* e0 = e_start().data();
+    const double* e1 = e_now().data();
+    std::vector<std::size_t> who;
+    std::vector<double> gains;
+    std::uint32_t skip[3] = {0xffffffffu, 0xffffffffu, 0xffffffffu};
+    for (int k = 0; k < 3 && std::size_t(k) < n; ++k) {
+      const std::uint32_t s0 = skip[0], s1 = skip[1];
+      const Gain top = be_.reduce(
+          n,
+          [=] RUBBLE_LAMBDA(std::uint32_t i) {
+            const bool taken = i == s0 || i == s1;
+            return Gain{taken ? -1e300 : e1[i] - e0[i], i};
+          },
+          Gain{-1e300, 0xffffffffu}, GainMax{});
+      if (top.index >= n) break;
+      who.push_back(top.index);
+      gains.push_back(top.gain);
+      skip[k] = top.index;
+    }
+    std::string what = "the total energy changed by " + fmt_g(last_change_) + " J in one step of " + fmt_g(double(dt)) +
+                       " s, beyond the energy watchdog's bound of " + fmt_g(last_bound_) +
+                       " J (simulation.energy_step_tolerance = " + fmt_g(energy_tolerance_) + " of the energy scale)";
+    if (retries > 0) what += " after " + std::to_string(retries) + " retries with shorter steps";
+    return EnergyJumpError(what, last_change_, last_bound_, std::move(who), std::move(gains));
   }
 
   // The first particle with a non-finite state (size(): none) and the time-
@@ -166,7 +333,8 @@ class StepSequence {
     const StateCheck r = be_.reduce(
         n,
         [=] RUBBLE_LAMBDA(std::uint32_t i) {
-          return StateCheck{finite_particle<D>(c.s, i) ? n : std::size_t(i), dt_limit_particle<D>(c, i)};
+          return StateCheck{finite_particle<D>(c.s, i, u_min_particle<D>(c, i)) ? n : std::size_t(i),
+                            dt_limit_particle<D>(c, i)};
         },
         StateCheck{n, Real(1e30)}, StateCheckMin{});
     dt_cached_ = r.dt;
@@ -222,18 +390,30 @@ class StepSequence {
     evaluate();
   }
 
-  // After the integrator's last update of a step: porous states back onto
-  // the loading envelope, the damage cap, the viscosity switch's bounds, the
+  // After the integrator's last update of a step: u up to its EOS's floor
+  // (the energy added booked), porous states back onto the loading envelope, the damage cap, the viscosity switch's bounds, the
   // plastic return mapping (with plastic-strain accumulation) at the step's
   // final state, particle shifting and the Coulomb walls' anchors. Nothing
   // when none is used. alpha_start: the distention at the start of the step
   // (porous runs).
   void end_step(const Real* alpha_start, Real dt) {
-    if (!(on_.porosity || on_.plasticity || on_.damage || on_.viscosity_switch || on_.wall_friction || on_.shifting))
+    if (!(on_.porosity || on_.plasticity || on_.damage || on_.viscosity_switch || on_.wall_friction || on_.shifting ||
+          on_.energy_floor))
       return;
     const ScopedSeconds timer(phases_.end_step);
     const std::size_t n = size();
     const RhsContext<D> c = context();
+    if (on_.energy_floor) {  // u back to its EOS's floor, the energy added booked (energy_step_ok)
+      const FloorSums f = be_.reduce(
+          n,
+          [=] RUBBLE_LAMBDA(std::uint32_t i) {
+            const double added = energy_floor_particle<D>(c, i);
+            return FloorSums{added, added > 0 ? 1ull : 0ull};
+          },
+          FloorSums{0, 0}, FloorSumOp{});
+      step_floor_.energy += f.energy;
+      step_floor_.count += f.count;
+    }
     if (on_.porosity)
       be_.for_each("end-of-step porosity", n, [=] RUBBLE_LAMBDA(std::uint32_t i) {
         porosity_end_step_particle<D>(c, i, alpha_start);
@@ -273,6 +453,8 @@ class StepSequence {
     stagger_du_ = {};
     as_chi_ = {};
     shift_ = {};
+    e_[0] = {};
+    e_[1] = {};
   }
 
   // ---- the passes of an evaluation (public for nvcc, see above)
@@ -289,6 +471,7 @@ class StepSequence {
     c.art_R = art_R_.size() ? art_R_.data() : nullptr;
     c.xsph_epsilon = ph_.xsph_epsilon;
     c.courant = ph_.courant;
+    c.density_step_fraction = ph_.density_step_fraction;
     c.force_factor = ph_.force_factor;
     c.h_tolerance = ph_.h_tolerance;
     c.body_force = g_;
@@ -437,8 +620,13 @@ class StepSequence {
     be_.for_each("body force", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { body_force_particle<D>(c, i); });
   }
 
+  // Held particles: their rates zeroed, the power they put into the rest
+  // first (wall_power_particle), for the books.
   void hold_boundaries() {
     const RhsContext<D> c = context();
+    books_.wall_power = be_.reduce(
+        size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { return wall_power_particle<D>(c, i); }, 0.0, DoubleSum{});
+    powers_.push_back(books_.wall_power);
     be_.for_each("hold boundaries", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { hold_boundary_particle<D>(c, i); });
   }
 
@@ -488,6 +676,17 @@ class StepSequence {
   RhsPhaseSeconds phases_;
   bool dt_known_ = false;  // dt_cached_ is the limit of the current state
   Real dt_cached_ = 0;
+  // energy bookkeeping and the watchdog
+  EnergyBooks books_;
+  std::vector<double> powers_;       // the held particles' power at each evaluation of this step
+  FloorSums step_floor_{0, 0};       // this step's internal-energy floor (booked when accepted)
+  double energy_tolerance_ = 0;      // the watchdog's bound per step (0: off)
+  bool energy_known_ = false;        // energy_start_ and e_start() are those of the current state
+  EnergySums energy_start_;
+  Array<double> e_[2];               // each particle's energy at the step's start (e_[e_first_]) and end
+  int e_first_ = 0;
+  double last_change_ = 0, last_bound_ = 0;
+  std::int64_t energy_retries_ = 0;
 };
 
 }  // namespace rubble

@@ -5,7 +5,12 @@
 //   momentum_x[,momentum_y[,momentum_z]]                (Dim columns)
 //   [angular_momentum_z]                                (2-D: L_z only)
 //   [angular_momentum_x,angular_momentum_y,angular_momentum_z]  (3-D)
-//   kinetic,internal,gravitational,total
+//   kinetic,internal,gravitational,total,
+//   wall_work,floor_energy,booked_total
+// wall_work: the work the held (boundary) particles did on the rest since
+// the run began; floor_energy: the energy the internal-energy floor added
+// (eos.hpp); booked_total = total - wall_work - floor_energy, what the
+// equations conserve (drivers/step_sequence.hpp, the energy watchdog).
 // 1-D has no angular momentum. Values are written with full double
 // precision (%.17g) and each line is flushed, so the file is complete up to
 // the last step even if the run dies.
@@ -30,6 +35,15 @@ struct ConservedRecord {
   double internal = 0;                     // sum m u
   double gravitational = 0;                // 1/2 sum m phi (self-gravity; 0 without)
   double total = 0;                        // kinetic + internal + gravitational
+  double wall_work = 0;                    // work of held particles on the rest, since the start [J]
+  double floor_energy = 0;                 // energy added by the internal-energy floor, since the start [J]
+  double booked_total = 0;                 // total - wall_work - floor_energy
+  // Sets the booked columns from a run's books.
+  void book(double wall, double floor) {
+    wall_work = wall;
+    floor_energy = floor;
+    booked_total = total - wall - floor;
+  }
 };
 
 class ConservedLog {

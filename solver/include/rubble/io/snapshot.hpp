@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "rubble/io/conserved_sums.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/scene/scene.hpp"
 
@@ -40,6 +41,7 @@ struct RestartState {
   std::vector<std::string> overrides;  // --set overrides, in order
   std::vector<LibraryText> libraries;  // library material files, as read
   std::vector<std::int64_t> body_first_id;  // body k holds ids [first[k], first[k+1])
+  EnergyBooks books;        // the energy bookkeeping so far (conserved.csv's booked columns)
 };
 
 struct SnapshotMeta {

@@ -31,6 +31,7 @@ struct Features {
   bool wall_extrapolation = false;  // a boundary body has boundary_state = "extrapolated"
   bool shifting = false;            // simulation.shifting > 0: particle shifting after each step
   bool staggered = false;           // solids, simulation.stress_update = "staggered" (leapfrog.hpp)
+  bool energy_floor = false;        // a material's EOS has the internal-energy floor (eos.hpp): raised to it after each step
 };
 
 }  // namespace rubble

@@ -41,6 +41,13 @@ struct SimulationConfig {
   double rk2_tolerance = 1e-5;              // relative error per step (rk2_adaptive)
   double dt_initial = 0;                    // 0 = from the Courant limit
   double dt_min = 0;                        // a step below this stops the run; 0 = 1e-12 * end_time
+  // The energy watchdog (issue #50 item 1, drivers/step_sequence.hpp): the
+  // largest change of the booked total energy one step may make, as a
+  // fraction of the run's energy scale; < 0 = the default courant^2, 0 = off.
+  double energy_step_tolerance = -1;
+  // Continuity density: the largest fraction of its density a particle may
+  // change in one step (issue #50 item 3); 0 = no such limit.
+  double density_step_fraction = 0.1;
   std::int64_t max_steps = 10000000;
   // Velocity damping for relaxing initial conditions: while t < damping_end,
   // every step multiplies v by exp(-dt / damping_time). 0 = off.

@@ -7,6 +7,16 @@
 //   murnaghan.hpp, tillotson.hpp), the thermodynamic p and c².
 // eos_evaluate: the raw values with the material's add-ons, in this order
 //   (docs/physics.md, "Equation of state"):
+//   0. internal-energy floor (issue #50 item 2; ideal gas and Tillotson, not
+//      Murnaghan, whose p does not depend on u): a state with u below
+//      kInternalEnergyFloor = 0 is evaluated at u = 0. The ideal gas's p = (γ−1)ρu
+//      is negative below it; Tillotson's ω = 1 + u/(E0 η²) vanishes at
+//      u = −E0 η², which in a vapour at η = 3e-4 is −1 J/kg, so p and c²
+//      diverge just below the floor, and its regime bounds E_iv, E_cv count
+//      from u = 0 at the cold reference state. The integrators' stages may
+//      pass such a u (an RK2 stage, a leapfrog prediction); the stored u is
+//      raised to the floor at the end of each step, with the energy this adds
+//      booked (drivers/step_sequence.hpp, end_step).
 //   1. tension cut-off (EosLimits::rho_limit > 0; Murnaghan and Tillotson):
 //      for η = ρ/ρ0 < rho_limit, Murnaghan p = 0; Tillotson drops the cold
 //      (compressed-formula) share, p = w_e p_e (0 in cold states, p_e
@@ -67,7 +77,14 @@ enum EosLimitFlags : unsigned {
   kEosPressureFloor = 2u,    // p raised to p_min
   kEosSoundSpeedFloor = 4u,  // c² raised to the Tillotson floor A/ρ0
   kEosMinSoundSpeed = 8u,    // c² raised to cs_min²
+  kEosEnergyFloor = 16u,     // evaluated at the internal-energy floor (u was below it)
 };
+
+// The internal-energy floor (add-on 0 above) [J/kg].
+inline constexpr Real kInternalEnergyFloor = Real(0);
+
+// Whether an EOS has the floor: every kind whose pressure depends on u.
+RUBBLE_HD_INLINE bool eos_has_energy_floor(const EosParams& e) { return e.kind != EosKind::Murnaghan; }
 
 struct EosState {
   Real p;                               // pressure
@@ -107,7 +124,11 @@ RUBBLE_HD_INLINE EosState eos_evaluate_raw(const EosParams& e, Real rho, Real u)
 }
 
 RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
+  // 0. the internal-energy floor
+  const bool floored = eos_has_energy_floor(e) && u < kInternalEnergyFloor;
+  if (floored) u = kInternalEnergyFloor;
   EosState s = eos_evaluate_raw(e, rho, u);
+  if (floored) s.limited |= kEosEnergyFloor;
   const EosLimits& l = e.limits;
   // 1. tension cut-off
   if (l.rho_limit > Real(0)) {
