@@ -185,7 +185,7 @@ static Real initial_viscosity_alpha(const MaterialParams& mp) {
 
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const Features& needs,
-                                          ParticleStore<D>& ps) {
+                                          ParticleStore<D>& ps, CollisionSetup* collision) {
   check_resources<D>(scene, needs, hfact);  // before any particle is made
   const auto materials = material_params_from_scene(scene);
   std::vector<std::vector<Vec<D>>> body_points;
@@ -284,6 +284,10 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
       ++next;
     }
   }
+  // [collision]: the bodies moved onto their orbit (before the wall
+  // anchors, which start where the particles are)
+  const CollisionSetup placed = place_collision<D>(scene, ps, first);
+  if (collision) *collision = placed;
   // Coulomb walls: every friction spring starts relaxed (wall_friction.hpp)
   if (!ps.wall_anchor.empty()) ps.wall_anchor = ps.x;
   apply_energy_deposits<D>(scene, ps);
@@ -465,7 +469,8 @@ Box<D> domain_from_scene(const Scene& scene) {
 #define RUBBLE_INSTANTIATE(D)                                                                      \
   template double lattice_cell_volume<D>(Lattice, double);                                         \
   template std::vector<Vec<D>> lattice_points<D>(BodyConfig);                                      \
-  template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const Features&, ParticleStore<D>&); \
+  template std::vector<std::int64_t> generate_bodies<D>(const Scene&, double, const Features&, ParticleStore<D>&,  \
+                                                       CollisionSetup*);                                   \
   template Box<D> domain_from_scene<D>(const Scene&);                                              \
   template double estimated_particle_count<D>(const Scene&);                                       \
   template std::size_t bytes_per_particle<D>(const Scene&, const Features&, double);              \

@@ -621,7 +621,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   fs.energy_retries = sys.energy_retries();
   if (!opt.quiet && fs.books.floor_events > 0)
     std::fprintf(stderr,
-                 "rubble: internal-energy floor: u was raised to 0 in %lld particle-steps, adding %g J "
+                 "rubble: internal-energy floor: u was raised to its EOS's floor in %lld particle-steps, adding %g J "
                  "(booked in conserved.csv: floor_energy)\n",
                  static_cast<long long>(fs.books.floor_events), fs.books.floor_energy);
   if (!opt.quiet && fs.energy_retries > 0)
@@ -647,8 +647,10 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   LoopStart start;
   std::vector<std::int64_t> body_first;
   if (opt.restart_from.empty()) {
-    body_first = generate_bodies<D>(scene, hfact, needs, ps);
+    CollisionSetup collision;
+    body_first = generate_bodies<D>(scene, hfact, needs, ps, &collision);
     check_initial_state<D>(scene, ps, body_first);  // x, v, rho, h, u as generated
+    if (scene.collision.enabled && !opt.quiet) std::fprintf(stderr, "rubble: %s\n", collision_report(collision).c_str());
     for (const std::string& w : check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact))
       std::fprintf(stderr, "rubble: warning: %s\n", w.c_str());
     if (!opt.quiet && opt.write_output) {

@@ -388,6 +388,7 @@ class SceneReader {
   void read_output(const toml::table& t, OutputConfig& o);
   // self-gravity (issue #5)
   void read_gravity(const toml::table& t, GravityConfig& g);
+  void read_collision(const toml::table& t, Scene& scene);
   BodyConfig read_polytrope_body(const std::string& p, const toml::table& t, const std::vector<MaterialConfig>& mats);
 };
 
@@ -1390,10 +1391,77 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
   return b;
 }
 
+// [collision] (docs/scene.md "Collisions"; issue #52 item 3).
+void SceneReader::read_collision(const toml::table& t, Scene& scene) {
+  const std::string p = "collision";
+  check_keys(t, p, {"target", "impactor", "impact_speed", "impact_speed_vesc", "v_infinity", "impact_angle",
+                    "separation"});
+  CollisionConfig& c = scene.collision;
+  c.enabled = true;
+  if (scene.simulation.dimension != 3 || scene.gravity.mode == GravityMode::Off)
+    fail(p, "needs a 3-D scene with self-gravity ([gravity]): the orbit and the escape speed come from G M");
+  // a body index or a list of them
+  auto bodies = [&](std::string_view name) {
+    const toml::node* n = t.get(name);
+    const std::string key = sub(p, name);
+    if (!n) fail(key, "missing required key (the index of a [[bodies]] entry, or a list of them)");
+    std::vector<int> out;
+    auto one = [&](const toml::node& v) {
+      const auto* i = v.as_integer();
+      if (!i) fail(key, "expected a body index (an integer), got " + type_name(v), &v);
+      if (i->get() < 0 || i->get() >= std::int64_t(scene.bodies.size()))
+        fail(key, "is " + std::to_string(i->get()) + ", but the scene has bodies 0 to " +
+                      std::to_string(scene.bodies.size() - 1), &v);
+      const BodyConfig& b = scene.bodies[std::size_t(i->get())];
+      const std::string body = "bodies[" + std::to_string(i->get()) + "]";
+      if (b.boundary != BoundaryKind::None) fail(key, body + " is a boundary body; a colliding body must be free", &v);
+      if (b.velocity[0] != 0 || b.velocity[1] != 0 || b.velocity[2] != 0)
+        fail(key, body + " has a velocity; the collision sets it (leave " + body + ".velocity out)", &v);
+      out.push_back(int(i->get()));
+    };
+    if (const toml::array* a = n->as_array()) {
+      if (a->empty()) fail(key, "is an empty list", n);
+      for (const toml::node& v : *a) one(v);
+    } else {
+      one(*n);
+    }
+    return out;
+  };
+  c.target = bodies("target");
+  c.impactor = bodies("impactor");
+  for (int i : c.impactor)
+    if (std::find(c.target.begin(), c.target.end(), i) != c.target.end())
+      fail(p + ".impactor", "bodies[" + std::to_string(i) + "] is in both the target and the impactor", t.get("impactor"));
+  int speeds = 0;
+  if (auto x = number(t, "impact_speed", p)) {
+    require(*x > 0, t, "impact_speed", p, *x, "> 0 [m/s]");
+    c.impact_speed = *x;
+    ++speeds;
+  }
+  if (auto x = number(t, "impact_speed_vesc", p)) {
+    require(*x > 0, t, "impact_speed_vesc", p, *x, "> 0 (the speed at contact over the mutual escape speed)");
+    c.impact_speed_vesc = *x;
+    ++speeds;
+  }
+  if (auto x = number(t, "v_infinity", p)) {
+    require(*x >= 0, t, "v_infinity", p, *x, ">= 0 [m/s]");
+    c.v_infinity = *x;
+    ++speeds;
+  }
+  if (speeds != 1)
+    fail(p, speeds == 0 ? "needs the impact speed: one of impact_speed [m/s], impact_speed_vesc, v_infinity [m/s]"
+                        : "give only one of impact_speed, impact_speed_vesc and v_infinity");
+  c.impact_angle = required_number(t, "impact_angle", p, "degrees between the line of centres and the relative "
+                                                         "velocity at contact, 0 = head-on");
+  require(c.impact_angle >= 0 && c.impact_angle < 90, t, "impact_angle", p, c.impact_angle, "in [0, 90) degrees");
+  c.separation = required_number(t, "separation", p, "the centres' distance at the start, in touching distances");
+  require(c.separation >= 1, t, "separation", p, c.separation, ">= 1 (touching distances R_t + R_i)");
+}
+
 Scene SceneReader::read(const toml::table& root) {
   Scene scene;
   scene.file = file_;
-  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits"});
+  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits", "collision"});
   read_simulation(root, scene.simulation);
   if (const toml::table* g = table(root, "gravity", "")) read_gravity(*g, scene.gravity);
 
@@ -1440,6 +1508,7 @@ Scene SceneReader::read(const toml::table& root) {
       scene.energy_deposits.push_back(read_energy_deposit(p, *t));
     }
   }
+  if (const toml::table* c = table(root, "collision", "")) read_collision(*c, scene);
   const toml::table* out_table = table(root, "output", "");
   if (out_table) read_output(*out_table, scene.output);
   // Resource guards (issue #13): a bounded number of snapshots, and a

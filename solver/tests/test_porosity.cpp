@@ -286,12 +286,6 @@ TEST(porosity_eos, reduces_to_matrix_at_alpha_one_and_when_off) {
   EXPECT_EQ(porous_eos_evaluate(m, pp, 2500.0, 1e6, 1.2).p, eos_evaluate(m, 2500.0, 1e6).p);
 }
 
-// kCold: a cold state 1 kJ/kg (about 1 K) above the reference u = 0. The
-// difference stencils below must not reach u < 0, where the EOS's
-// internal-energy floor (eos.hpp, issue #50) puts a kink; at u = 0 itself a
-// centred difference straddles it.
-constexpr double kCold = 1e3;
-
 TEST(porosity_eos, sound_speed_is_the_frozen_alpha_derivative) {
   // c2 means ∂p/∂ρ|_{u,α} + (p/ρ²) ∂p/∂u|_{ρ,α} (header comment), checked by
   // finite differences of the porous p at fixed α, in compressed, cold
@@ -302,7 +296,7 @@ TEST(porosity_eos, sound_speed_is_the_frozen_alpha_derivative) {
   int checked = 0;
   for (double alpha : {1.05, 1.2, 1.275})
     for (double eta_s : {0.97, 1.001, 1.05, 1.3, 1.8})
-      for (double u : {kCold, 1e6, 2e7}) {
+      for (double u : {0.0, 1e6, 2e7}) {
         const double rho = eta_s * kAluminium.rho0 / alpha;
         const PorousEosState q = porous_eos_evaluate(m, pp, rho, u, alpha);
         if (q.matrix.limited != 0) continue;
@@ -396,7 +390,7 @@ TEST(porosity_rate, plastic_chain_rule_matches_curve_following_difference) {
     PorosityParams pp;
   };
   for (const Case& c : {Case{tillotson(kAluminium), porous_aluminium()}, Case{tillotson(kBasalt), pumice()}}) {
-    for (double u : {kCold, 2e5}) {
+    for (double u : {0.0, 2e5}) {
       const std::vector<State> states = plastic_states(c.m, c.pp, u);
       EXPECT_GT(states.size(), 20u);
       for (const State& s : states) expect_rate_matches_curve_fd(c.m, c.pp, s);
@@ -416,12 +410,12 @@ TEST(porosity_rate, elastic_chain_rule_matches_curve_following_difference) {
     // strains ≥ 1e-4: p far (≥ 1e2 stencil steps) from the kink of the envelope at p = 0
     for (double strain : {1e-4, 2e-4, 4e-4}) {
       const double rho = rho0b * (1 + strain);
-      const double a = porous_alpha_on_loading_curve(c.m, c.pp, rho, kCold, c.pp.alpha_e);
-      const double p = porous_p(c.m, c.pp, rho, kCold, a);
+      const double a = porous_alpha_on_loading_curve(c.m, c.pp, rho, 0.0, c.pp.alpha_e);
+      const double p = porous_p(c.m, c.pp, rho, 0.0, a);
       if (!(p > 0 && p < 0.9 * c.pp.p_e)) continue;
       ASSERT_EQ(porosity_branch(c.m, c.pp, p, a), PorosityBranch::Elastic);
       EXPECT_LT(a, c.pp.alpha_e);
-      expect_rate_matches_curve_fd(c.m, c.pp, State{rho, kCold, a, p});
+      expect_rate_matches_curve_fd(c.m, c.pp, State{rho, 0.0, a, p});
       ++checked;
     }
     EXPECT_GE(checked, 2);
@@ -506,7 +500,7 @@ TEST(porosity_rate, without_elastic_branch_alpha_holds_until_p_e) {
   }
   EXPECT_GE(below, 2);
   // above p_e the same plastic states as with the branch on
-  const std::vector<State> states = plastic_states(m, pp, kCold);
+  const std::vector<State> states = plastic_states(m, pp, 0.0);
   EXPECT_GT(states.size(), 20u);
   for (const State& s : states) {
     EXPECT_EQ(porosity_branch(m, pp, s.p, s.alpha), PorosityBranch::Plastic);

@@ -894,7 +894,7 @@ RUBBLE_HD_INLINE double wall_power_particle(const RhsContext<D>& c, std::uint32_
 // internal-energy floor, -infinity where it has none (eos.hpp).
 template <int D>
 RUBBLE_HD_INLINE Real u_min_particle(const RhsContext<D>& c, std::uint32_t a) {
-  return eos_has_energy_floor(c.mat[c.s.material_id[a]].eos) ? kInternalEnergyFloor : Real(-INFINITY);
+  return eos_energy_floor(c.mat[c.s.material_id[a]].eos, c.s.rho[a]);
 }
 
 // The internal-energy floor after a step (issue #50 item 2; eos.hpp): u
@@ -903,9 +903,10 @@ RUBBLE_HD_INLINE Real u_min_particle(const RhsContext<D>& c, std::uint32_t a) {
 template <int D>
 RUBBLE_HD_INLINE double energy_floor_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
-  if (!(s.u[a] < kInternalEnergyFloor) || !eos_has_energy_floor(c.mat[s.material_id[a]].eos)) return 0;
-  const double added = double(s.m[a]) * (double(kInternalEnergyFloor) - double(s.u[a]));
-  s.u[a] = kInternalEnergyFloor;
+  const Real floor = u_min_particle<D>(c, a);
+  if (!(s.u[a] < floor)) return 0;
+  const double added = double(s.m[a]) * (double(floor) - double(s.u[a]));
+  s.u[a] = floor;
   return added;
 }
 
@@ -979,16 +980,19 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
     const Real dt_a = porosity_dt_limit(s.alpha[a], s.dalphadt[a], kAlphaStepFraction);
     dt = dt_a < dt ? dt_a : dt;
   }
-  // continuity density: |d rho| <= density_step_fraction rho per step. An
-  // explicit update rho + dt d rho/dt goes negative once dt |div v| exceeds
-  // 1, which the Courant limit does not prevent where material expands into
-  // vacuum faster than its sound speed (the Einfeldt 1-2-0-3 rarefaction:
-  // test_energy_watchdog, Vapour.*). miluphcuda limits its step the same
-  // way, SAFETY_FIRST (|rho| + rho_min) / |d rho/dt| with SAFETY_FIRST = 0.1
-  // in its Euler and Heun schemes (src/predictor_corrector_euler.cu,
-  // coupled_heun_rk4_sph_nbody.cu): the default (issue #50 item 3).
-  if (s.drhodt && c.density_step_fraction > Real(0) && s.drhodt[a] != Real(0)) {
-    const Real dt_r = c.density_step_fraction * s.rho[a] / std::fabs(s.drhodt[a]);
+  // continuity density, where the density falls: -d rho <= density_step_fraction
+  // rho per step. An explicit update rho + dt d rho/dt goes negative once
+  // dt |div v| exceeds 1, which the Courant limit does not prevent where
+  // material expands into vacuum faster than its sound speed (the Einfeldt
+  // 1-2-0-3 rarefaction: test_energy_watchdog, Vapour.*). miluphcuda limits
+  // its step by SAFETY_FIRST (|rho| + rho_min) / |d rho/dt| with SAFETY_FIRST
+  // = 0.1 in its Euler and Heun schemes (src/predictor_corrector_euler.cu,
+  // coupled_heun_rk4_sph_nbody.cu), the default here (issue #50 item 3), in
+  // both directions; rubble only where rho falls: a rising density cannot
+  // turn negative, and the compaction front of the porous piston rung would
+  // otherwise take 1.3-1.8 times as many steps (p_alpha_piston_1d).
+  if (s.drhodt && c.density_step_fraction > Real(0) && s.drhodt[a] < Real(0)) {
+    const Real dt_r = c.density_step_fraction * s.rho[a] / -s.drhodt[a];
     dt = dt_r < dt ? dt_r : dt;
   }
   if (s.ddamage_root_dt) {

@@ -7,6 +7,7 @@
 
 #include "rubble/core/box.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/scene/collision.hpp"
 #include "rubble/scene/scene.hpp"
 
 namespace rubble {
@@ -31,10 +32,12 @@ std::vector<Vec<D>> lattice_points(BodyConfig b);
 // a non-finite value. Returns where each body's particle ids begin: body k
 // holds ids [first[k], first[k + 1]) (size: bodies + 1).
 // The fields a run allocates: features_of_scene (rubble/drivers/run_physics.hpp).
+// A [collision] places its bodies on their orbit (scene/collision.hpp);
+// `collision` (when given) receives what it did.
 
 template <int D>
 std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, const Features& needs,
-                                          ParticleStore<D>& ps);
+                                          ParticleStore<D>& ps, CollisionSetup* collision = nullptr);
 
 // The body that generated particle `id`, from generate_bodies' `first`
 // (body k holds ids [first[k], first[k + 1])); 0 if `first` is empty.

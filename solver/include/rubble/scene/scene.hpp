@@ -283,6 +283,19 @@ struct EnergyDepositConfig {
   DepositProfile profile = DepositProfile::Kernel;
 };
 
+// [collision] (issue #52 item 3; scene/collision.hpp): two groups of bodies
+// placed on the two-body orbit that brings them into contact at the given
+// speed and angle. Exactly one of the three speeds is set (>= 0).
+struct CollisionConfig {
+  bool enabled = false;
+  std::vector<int> target, impactor;  // scene body indices
+  double impact_speed = -1;           // relative speed at contact [m/s]
+  double impact_speed_vesc = -1;      // ... in units of the mutual escape speed
+  double v_infinity = -1;             // relative speed at infinity [m/s]
+  double impact_angle = 0;            // [degrees], 0 head-on
+  double separation = 0;              // the centres' distance at the start, in touching distances (>= 1)
+};
+
 struct Scene {
   std::string file;     // where it came from (for messages)
   std::string text;     // full scene text after --set overrides (stored in snapshots)
@@ -296,6 +309,7 @@ struct Scene {
   OutputConfig output;
   GravityConfig gravity;
   std::vector<EnergyDepositConfig> energy_deposits;
+  CollisionConfig collision;
 };
 
 }  // namespace rubble

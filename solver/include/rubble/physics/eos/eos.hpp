@@ -7,16 +7,20 @@
 //   murnaghan.hpp, tillotson.hpp), the thermodynamic p and c².
 // eos_evaluate: the raw values with the material's add-ons, in this order
 //   (docs/physics.md, "Equation of state"):
-//   0. internal-energy floor (issue #50 item 2; ideal gas and Tillotson, not
-//      Murnaghan, whose p does not depend on u): a state with u below
-//      kInternalEnergyFloor = 0 is evaluated at u = 0. The ideal gas's p = (γ−1)ρu
-//      is negative below it; Tillotson's ω = 1 + u/(E0 η²) vanishes at
-//      u = −E0 η², which in a vapour at η = 3e-4 is −1 J/kg, so p and c²
-//      diverge just below the floor, and its regime bounds E_iv, E_cv count
-//      from u = 0 at the cold reference state. The integrators' stages may
-//      pass such a u (an RK2 stage, a leapfrog prediction); the stored u is
-//      raised to the floor at the end of each step, with the energy this adds
-//      booked (drivers/step_sequence.hpp, end_step).
+//   0. internal-energy floor (issue #50 item 2; eos_energy_floor): a state
+//      with u below it is evaluated at the floor. Ideal gas: u >= 0 (below,
+//      p = (γ−1)ρu < 0). Tillotson: u >= −E0 η²/2, i.e. ω = 1 + u/(E0 η²)
+//      >= 1/2: ω vanishes at u = −E0 η², where p and c² diverge; in a vapour
+//      at η = 3e-4 that is −1 J/kg (ice), so there the floor is u ≈ 0, while
+//      condensed states keep the negative u the energy equation gives them
+//      (colder than the reference state; at η = 1 the floor is −E0/2,
+//      −5e6 J/kg for ice: a floor at 0 there added the cold compression
+//      energy Tillotson keeps outside u, 60 times a self-gravitating basalt
+//      sphere's binding energy in 100 s). Murnaghan: none (p does not depend
+//      on u). The integrators' stages may pass a u below it (an RK2 stage, a
+//      leapfrog prediction); the stored u is raised to the floor at the end
+//      of each step, with the energy this adds booked
+//      (drivers/step_sequence.hpp, end_step).
 //   1. tension cut-off (EosLimits::rho_limit > 0; Murnaghan and Tillotson):
 //      for η = ρ/ρ0 < rho_limit, Murnaghan p = 0; Tillotson drops the cold
 //      (compressed-formula) share, p = w_e p_e (0 in cold states, p_e
@@ -80,11 +84,24 @@ enum EosLimitFlags : unsigned {
   kEosEnergyFloor = 16u,     // evaluated at the internal-energy floor (u was below it)
 };
 
-// The internal-energy floor (add-on 0 above) [J/kg].
-inline constexpr Real kInternalEnergyFloor = Real(0);
-
-// Whether an EOS has the floor: every kind whose pressure depends on u.
+// Whether an EOS has the internal-energy floor (add-on 0 above): every kind
+// whose pressure depends on u.
 RUBBLE_HD_INLINE bool eos_has_energy_floor(const EosParams& e) { return e.kind != EosKind::Murnaghan; }
+
+// The internal-energy floor at density rho [J/kg] (add-on 0 above):
+// 0 for the ideal gas, −E0 (rho/rho0)²/2 for Tillotson, −infinity for
+// Murnaghan.
+RUBBLE_HD_INLINE Real eos_energy_floor(const EosParams& e, Real rho) {
+  switch (e.kind) {
+    case EosKind::IdealGas: return Real(0);
+    case EosKind::Tillotson: {
+      const Real eta = rho / e.tillotson.rho0;
+      return Real(-0.5) * e.tillotson.E0 * eta * eta;
+    }
+    case EosKind::Murnaghan: break;
+  }
+  return Real(-INFINITY);
+}
 
 struct EosState {
   Real p;                               // pressure
@@ -125,8 +142,9 @@ RUBBLE_HD_INLINE EosState eos_evaluate_raw(const EosParams& e, Real rho, Real u)
 
 RUBBLE_HD_INLINE EosState eos_evaluate(const EosParams& e, Real rho, Real u) {
   // 0. the internal-energy floor
-  const bool floored = eos_has_energy_floor(e) && u < kInternalEnergyFloor;
-  if (floored) u = kInternalEnergyFloor;
+  const Real u_floor = eos_energy_floor(e, rho);
+  const bool floored = u < u_floor;
+  if (floored) u = u_floor;
   EosState s = eos_evaluate_raw(e, rho, u);
   if (floored) s.limited |= kEosEnergyFloor;
   const EosLimits& l = e.limits;
