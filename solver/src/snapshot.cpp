@@ -3,6 +3,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -390,6 +391,15 @@ void write_file(const std::string& file, const ParticleStore<D>& ps, const Snaps
           write_dataset(h5.get(), file, std::string(f.name), f.unit, arr);
         },
         f.member);
+  }
+  // body: each particle's [[bodies]] entry (issue #52 item 4), from its id
+  // and the run's body_first_id (restartable snapshots: a run's own)
+  const std::vector<std::int64_t>& first = meta.restart.body_first_id;
+  if (meta.restartable && first.size() >= 2 && ps.id.size() == ps.n) {
+    std::vector<std::int32_t> body(ps.n);
+    for (std::size_t i = 0; i < ps.n; ++i)
+      body[i] = std::int32_t(std::upper_bound(first.begin(), first.end(), ps.id[i]) - first.begin() - 1);
+    write_dataset(h5.get(), file, "body", "1", body);
   }
   if (meta.restartable) write_restart_group<D>(h5.get(), file, ps, meta.restart);
   h5.close(file, "H5Fclose");

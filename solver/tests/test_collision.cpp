@@ -5,13 +5,18 @@
 // bodies have zero total momentum and their centres where the orbit starts;
 // bad [collision] tables are refused with the key.
 #include <gtest/gtest.h>
+#include <hdf5.h>
+#include <unistd.h>
 
 #include <array>
+#include <filesystem>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "rubble/drivers/run_physics.hpp"
+#include "rubble/io/snapshot.hpp"
+#include "rubble/run.hpp"
 #include "rubble/scene/collision.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/scene/scene_parser.hpp"
@@ -231,4 +236,39 @@ TEST(CollisionScene, UnreachableStartIsRefusedAtSetUp) {
     EXPECT_EQ(e.key(), "collision");
     EXPECT_NE(std::string(e.what()).find("apoapsis"), std::string::npos) << e.what();
   }
+}
+
+// Each particle's body of origin is a snapshot field (`body`, issue #52
+// item 4): a run of two bodies writes 0 for the first body's particles and 1
+// for the second's, whatever order the solver sorted them into.
+TEST(CollisionSnapshot, SnapshotsCarryEachParticlesBody) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rubble_body_field_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  RunOptions opt;
+  opt.out_dir = dir.string();
+  opt.quiet = true;
+  const Scene scene = parse_scene(
+      two_spheres("target = 0\nimpactor = 1\nimpact_speed_vesc = 2.0\nimpact_angle = 45.0\nseparation = 2.0\n") +
+          "[output]\nname = \"pair\"\ninterval = 0.5\n",
+      "c.toml");
+  run_scene(scene, opt);
+  const std::string file = (dir / snapshot_filename("pair", 1)).string();
+  ParticleStore<3> ps;
+  SnapshotMeta meta;
+  read_restart<3>(file, ps, meta);  // the fields and the restart group (body_first_id)
+  ASSERT_EQ(meta.restart.body_first_id.size(), 3u);
+  std::vector<std::int32_t> body(ps.n, -1);
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const hid_t d = H5Dopen2(f, "body", H5P_DEFAULT);
+  ASSERT_GE(d, 0) << "no dataset 'body'";
+  EXPECT_GE(H5Dread(d, H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, body.data()), 0);
+  H5Dclose(d);
+  H5Fclose(f);
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < ps.n; ++i)
+    wrong += body[i] != (ps.id[i] < meta.restart.body_first_id[1] ? 0 : 1);
+  EXPECT_EQ(wrong, 0u);
+  std::filesystem::remove_all(dir);
 }

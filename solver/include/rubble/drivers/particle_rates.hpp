@@ -989,8 +989,7 @@ RUBBLE_HD_INLINE Real dt_limit_particle(const RhsContext<D>& c, std::uint32_t a)
   // = 0.1 in its Euler and Heun schemes (src/predictor_corrector_euler.cu,
   // coupled_heun_rk4_sph_nbody.cu), the default here (issue #50 item 3), in
   // both directions; rubble only where rho falls: a rising density cannot
-  // turn negative, and the compaction front of the porous piston rung would
-  // otherwise take 1.3-1.8 times as many steps (p_alpha_piston_1d).
+  // turn negative, so compression (shocks, compaction) keeps its Courant step.
   if (s.drhodt && c.density_step_fraction > Real(0) && s.drhodt[a] < Real(0)) {
     const Real dt_r = c.density_step_fraction * s.rho[a] / -s.drhodt[a];
     dt = dt_r < dt ? dt_r : dt;
