@@ -416,3 +416,41 @@ TEST(ExactRiemann, NonPositiveOrNonFiniteInputThrows) {
 }
 
 }  // namespace
+
+// ---- two gases: gamma_L left of the contact, gamma_R right of it ------------
+
+// The star state of a two-gamma problem satisfies each side's own wave
+// relations (Toro ch. 4 with gamma_K): here a rarefaction into the
+// gamma = 1.4 gas (isentrope and Riemann invariant) and a shock into the
+// gamma = 5/3 gas (Hugoniot density ratio, mass flux, shock speed). A mixed-up
+// gamma breaks them at the 1e-2 level; they hold to 1e-12.
+TEST(ExactRiemann, TwoGasesEachSideKeepsItsOwnWaveRelations) {
+  const double gL = 1.4, gR = 5.0 / 3.0;
+  const ExactRiemann r(kSodLeft, kSodRight, gL, gR);
+  const auto& s = r.star();
+  ASSERT_FALSE(s.left_is_shock);
+  ASSERT_TRUE(s.right_is_shock);
+  const double aL = std::sqrt(gL * kSodLeft.p / kSodLeft.rho);
+  // left rarefaction: isentrope and the Riemann invariant v + 2a/(gamma-1)
+  expect_rel(s.rho_left, kSodLeft.rho * std::pow(s.p / kSodLeft.p, 1 / gL), 1e-12, "left isentrope");
+  const double a_star = std::sqrt(gL * s.p / s.rho_left);
+  expect_rel(s.v + 2 * a_star / (gL - 1), kSodLeft.v + 2 * aL / (gL - 1), 1e-12, "left Riemann invariant");
+  // right shock: Hugoniot ratio, mass flux j^2 = (p* - pR)/(1/rhoR - 1/rho*), speed
+  const double ratio = ((gR + 1) * s.p + (gR - 1) * kSodRight.p) / ((gR - 1) * s.p + (gR + 1) * kSodRight.p);
+  expect_rel(s.rho_right / kSodRight.rho, ratio, 1e-12, "right Hugoniot");
+  // mass flux across the shock: j^2 = (p* - pR)/(1/rhoR - 1/rho*), v* - vR = j (1/rhoR - 1/rho*)
+  const double dvol = 1 / kSodRight.rho - 1 / s.rho_right;
+  const double j2 = (s.p - kSodRight.p) / dvol;
+  expect_rel((s.v - kSodRight.v) * (s.v - kSodRight.v), j2 * dvol * dvol, 1e-12, "right mass flux");
+  const double shock = kSodRight.v + s.rho_right * (s.v - kSodRight.v) / (s.rho_right - kSodRight.rho);
+  expect_rel(s.right_head, shock, 1e-12, "right shock speed");
+  // the gamma of each side, and the sampled energies with it
+  EXPECT_EQ(r.gamma_at(s.v - 1e-9), gL);
+  EXPECT_EQ(r.gamma_at(s.v + 1e-9), gR);
+  expect_rel(r.internal_energy_at(10.0), kSodRight.p / ((gR - 1) * kSodRight.rho), 1e-15, "right energy");
+  expect_rel(r.internal_energy_at(-10.0), kSodLeft.p / ((gL - 1) * kSodLeft.rho), 1e-15, "left energy");
+  // one gamma through the two-gamma constructor: the same solution
+  const ExactRiemann one(kSodLeft, kSodRight, 1.4), two(kSodLeft, kSodRight, 1.4, 1.4);
+  EXPECT_EQ(one.star().p, two.star().p);
+  EXPECT_EQ(one.star().rho_right, two.star().rho_right);
+}
