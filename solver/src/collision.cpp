@@ -150,15 +150,19 @@ CollisionSetup place_collision(const Scene& scene, ParticleStore<D>& ps, const s
       throw InputError(scene.file, "collision", e.what());
     }
     // barycentric: the target at -(M_i/M) r, the impactor at +(M_t/M) r
-    auto move = [&](const Group& g, double share) {
-      for (std::size_t i : g.particles)
+    // and each spinning rigidly about its own centre of mass: v += w x (x - com)
+    auto move = [&](const Group& g, double share, const std::array<double, 3>& w) {
+      for (std::size_t i : g.particles) {
+        const double r[3] = {ps.x[i][0] - g.com[0], ps.x[i][1] - g.com[1], ps.x[i][2] - g.com[2]};
+        const double spin[3] = {w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]};
         for (int k = 0; k < 3; ++k) {
           ps.x[i][k] += Real(share * o.x_start[k] - g.com[k]);
-          ps.v[i][k] += Real(share * o.v_start[k]);
+          ps.v[i][k] += Real(share * o.v_start[k] + spin[k]);
         }
+      }
     };
-    move(t, -im.m / M);
-    move(im, t.m / M);
+    move(t, -im.m / M, cc.spin_target);
+    move(im, t.m / M, cc.spin_impactor);
     out.mass_target = t.m;
     out.mass_impactor = im.m;
     out.radius_target = t.R;

@@ -1395,7 +1395,7 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
 void SceneReader::read_collision(const toml::table& t, Scene& scene) {
   const std::string p = "collision";
   check_keys(t, p, {"target", "impactor", "impact_speed", "impact_speed_vesc", "v_infinity", "impact_angle",
-                    "separation"});
+                    "separation", "spin_target", "spin_impactor"});
   CollisionConfig& c = scene.collision;
   c.enabled = true;
   if (scene.simulation.dimension != 3 || scene.gravity.mode == GravityMode::Off)
@@ -1456,6 +1456,8 @@ void SceneReader::read_collision(const toml::table& t, Scene& scene) {
   require(c.impact_angle >= 0 && c.impact_angle < 90, t, "impact_angle", p, c.impact_angle, "in [0, 90) degrees");
   c.separation = required_number(t, "separation", p, "the centres' distance at the start, in touching distances");
   require(c.separation >= 1, t, "separation", p, c.separation, ">= 1 (touching distances R_t + R_i)");
+  if (auto w = vector(t, "spin_target", p)) c.spin_target = *w;
+  if (auto w = vector(t, "spin_impactor", p)) c.spin_impactor = *w;
 }
 
 Scene SceneReader::read(const toml::table& root) {

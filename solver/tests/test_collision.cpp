@@ -211,7 +211,7 @@ TEST(CollisionScene, BadTablesAreRefusedWithTheKey) {
   refused("target = 0\nimpactor = 1\nimpact_speed = 1.0\nimpact_angle = 10.0\nseparation = 0.5\n",
           "collision.separation", ">= 1");
   refused("target = 0\nimpactor = 1\nimpact_speed = 1.0\nimpact_angle = 10.0\nseparation = 2.0\nspin = 1.0\n",
-          "collision.spin", "unknown key");
+          "collision.spin", "unknown key");  // (spin_target, spin_impactor)
   // a body that already moves
   std::string moving = two_spheres(ok);
   moving.replace(moving.find("radius = 5.0e4\n"), 15, "radius = 5.0e4\nvelocity = [1.0, 0.0, 0.0]\n");
@@ -271,4 +271,53 @@ TEST(CollisionSnapshot, SnapshotsCarryEachParticlesBody) {
     wrong += body[i] != (ps.id[i] < meta.restart.body_first_id[1] ? 0 : 1);
   EXPECT_EQ(wrong, 0u);
   std::filesystem::remove_all(dir);
+}
+
+// spin_target, spin_impactor: each body turns rigidly about its own centre
+// of mass (L = I w about it), the total momentum stays zero.
+TEST(CollisionPlacement, SpinIsARigidRotationAboutEachBodysCentre) {
+  const Scene scene = parse_scene(
+      two_spheres("target = 0\nimpactor = 1\nimpact_speed_vesc = 2.0\nimpact_angle = 30.0\nseparation = 2.0\n"
+                  "spin_target = [0.0, 0.0, 1e-3]\nspin_impactor = [2e-3, 0.0, 0.0]\n"),
+      "c.toml");
+  ParticleStore<3> ps;
+  const std::vector<std::int64_t> first =
+      generate_bodies<3>(scene, smoothing_factor(scene.simulation), features_of_scene(scene), ps);
+  double p[3] = {0, 0, 0}, scale = 0;
+  const double w[2][3] = {{0, 0, 1e-3}, {2e-3, 0, 0}};
+  for (int b = 0; b < 2; ++b) {
+    double M = 0, com[3] = {0, 0, 0}, vc[3] = {0, 0, 0};
+    for (std::int64_t i = first[b]; i < first[b + 1]; ++i) {
+      M += ps.m[i];
+      for (int k = 0; k < 3; ++k) {
+        com[k] += ps.m[i] * ps.x[i][k];
+        vc[k] += ps.m[i] * ps.v[i][k];
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      com[k] /= M;
+      vc[k] /= M;
+    }
+    // every particle: v = v_c + w x (x - com)
+    double worst = 0, speed = 0;
+    for (std::int64_t i = first[b]; i < first[b + 1]; ++i) {
+      const double r[3] = {ps.x[i][0] - com[0], ps.x[i][1] - com[1], ps.x[i][2] - com[2]};
+      const double s[3] = {w[b][1] * r[2] - w[b][2] * r[1], w[b][2] * r[0] - w[b][0] * r[2],
+                           w[b][0] * r[1] - w[b][1] * r[0]};
+      for (int k = 0; k < 3; ++k) {
+        worst = std::max(worst, std::fabs(ps.v[i][k] - vc[k] - s[k]));
+        speed = std::max(speed, std::fabs(s[k]));
+        p[k] += ps.m[i] * ps.v[i][k];
+      }
+    }
+    EXPECT_GT(speed, 0.0) << "body " << b << " does not spin";
+    EXPECT_LE(worst, 1e-9 * (speed + std::fabs(vc[0]) + std::fabs(vc[1]))) << "body " << b;
+    scale += M * (std::fabs(vc[0]) + std::fabs(vc[1]) + speed);
+  }
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(p[k], 0.0, 1e-13 * scale) << "momentum " << k;
+  // a spin of the wrong length is refused with the key
+  EXPECT_NE(rubble::test::parse_error(two_spheres("target = 0\nimpactor = 1\nimpact_speed = 1.0\nimpact_angle = 0.0\n"
+                                                  "separation = 2.0\nspin_target = [1.0, 2.0]\n"))
+                .find("collision.spin_target"),
+            std::string::npos);
 }

@@ -294,6 +294,7 @@ struct CollisionConfig {
   double v_infinity = -1;             // relative speed at infinity [m/s]
   double impact_angle = 0;            // [degrees], 0 head-on
   double separation = 0;              // the centres' distance at the start, in touching distances (>= 1)
+  std::array<double, 3> spin_target{}, spin_impactor{};  // rigid rotation about each body's centre of mass [rad/s]
 };
 
 struct Scene {
