@@ -34,6 +34,7 @@
 #include "rubble/run.hpp"
 #include "rubble/scene/initial_conditions.hpp"
 #include "rubble/scene/scene_parser.hpp"
+#include "conserved_column.hpp"
 
 using namespace rubble;
 
@@ -48,27 +49,7 @@ struct TempDir {
   ~TempDir() { std::filesystem::remove_all(path); }
 };
 
-// The conserved.csv column `name` of a run directory.
-std::vector<double> conserved_column(const std::filesystem::path& dir, const std::string& name) {
-  std::ifstream f(dir / "conserved.csv");
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::string> head;
-  {
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) head.push_back(c);
-  }
-  const auto col = std::find(head.begin(), head.end(), name) - head.begin();
-  EXPECT_LT(std::size_t(col), head.size()) << "no column " << name;
-  std::vector<double> out;
-  while (std::getline(f, line)) {
-    std::stringstream ss(line);
-    std::string c;
-    for (long k = 0; k <= col && std::getline(ss, c, ','); ++k)
-      if (k == col) out.push_back(std::stod(c));
-  }
-  return out;
-}
+using rubble::test::conserved_column;
 
 // Water ice, Tillotson (reference_data/materials/ice.toml: Benz & Asphaug 1999).
 const char* kIce =

@@ -26,6 +26,7 @@
 #include "rubble/physics/porosity.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/scene_parser.hpp"
+#include "conserved_column.hpp"
 
 using namespace rubble;
 
@@ -99,26 +100,7 @@ std::vector<ParticleStore<D>> run_snapshots(const Scene& s, const TempDir& dir) 
 
 bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
 
-// The conserved.csv column `name` of a run directory.
-std::vector<double> conserved_column(const std::filesystem::path& dir, const std::string& name) {
-  std::ifstream f(dir / "conserved.csv");
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::string> head;
-  {
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) head.push_back(c);
-  }
-  const auto col = std::find(head.begin(), head.end(), name) - head.begin();
-  std::vector<double> out;
-  while (std::getline(f, line)) {
-    std::stringstream ss(line);
-    std::string c;
-    for (long k = 0; k <= col && std::getline(ss, c, ','); ++k)
-      if (k == col) out.push_back(std::stod(c));
-  }
-  return out;
-}
+using rubble::test::conserved_column;
 
 }  // namespace
 
