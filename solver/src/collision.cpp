@@ -133,7 +133,7 @@ CollisionSetup place_collision(const Scene& scene, ParticleStore<D>& ps, const s
           for (int k = 0; k < 3; ++k) r2 += (ps.x[i][k] - g.com[k]) * (ps.x[i][k] - g.com[k]);
           far = std::max(far, std::sqrt(r2));
         }
-        g.R = std::max(g.R, bc.shape == BodyShape::Polytrope ? bc.radius : far + 0.5 * bc.spacing);
+        g.R = std::max(g.R, bc.shape == BodyShape::Polytrope || bc.shape == BodyShape::Layered ? bc.radius : far + 0.5 * bc.spacing);
       }
       return g;
     };

@@ -11,7 +11,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double reference_density(const EosParams& e) {
+}  // namespace
+
+double layer_reference_density(const EosParams& e) {
   switch (e.kind) {
     case EosKind::Murnaghan: return e.murnaghan.rho0;
     case EosKind::Tillotson: return e.tillotson.rho0;
@@ -21,9 +23,11 @@ double reference_density(const EosParams& e) {
       "hydrostatic_profile: an ideal-gas layer has no density at zero pressure (use Murnaghan or Tillotson)");
 }
 
+namespace {
+
 // The density at which the EOS gives pressure p with u = 0 (bisection).
 double density_at_pressure(const EosParams& e, double p) {
-  const double rho0 = reference_density(e);
+  const double rho0 = layer_reference_density(e);
   double lo = 0.5 * rho0, hi = rho0;
   while (double(eos_evaluate(e, Real(lo), 0).p) > p) lo *= 0.5;
   while (double(eos_evaluate(e, Real(hi), 0).p) < p) {
@@ -96,13 +100,28 @@ double integrate(const std::vector<HydrostaticLayer>& layers, double G, int step
         out->layer.push_back(k);
       }
       if (i == steps) break;
+      const State before = s;
       s = step(e, G, r, h, s);
+      const double r_before = r;
       r = r_out + (i + 1) * h;
+      // too small a mass: m runs out at r0 above the centre. The residual
+      // is then minus the ball that would still need filling, -4/3 pi rho
+      // r0^3, which joins the residual of the masses that reach r_stop
+      // continuously at r0 = r_stop (a residual that jumps, as a bare
+      // failure of -M did, stalls the root finder on the jump: 1.7e-6 M
+      // short in an iron-basalt-ice embryo)
+      if (!out && s.m <= 0 && before.m > 0) {
+        const double r0 = r_before + (r - r_before) * before.m / (before.m - s.m);
+        return -4.0 / 3.0 * kPi * before.rho * r0 * r0 * r0;
+      }
       // a mass far off: too large blows p up at the centre (m > 0), too
       // small drives m and then p negative until the density fails
       if (!(std::isfinite(s.p) && std::isfinite(s.rho) && s.rho > 0)) return s.m > 0 ? M : -M;
     }
-    if (out) out->layer_mass.insert(out->layer_mass.begin(), m_top - s.m);
+    if (out) {
+      out->layer_mass.insert(out->layer_mass.begin(), m_top - s.m);
+      out->layer_radius.insert(out->layer_radius.begin(), r_out);
+    }
   }
   if (out) out->centre_pressure = s.p;
   return s.m - 4.0 / 3.0 * kPi * r_stop * r_stop * r_stop * s.rho;
@@ -119,7 +138,7 @@ HydrostaticProfile hydrostatic_profile(const std::vector<HydrostaticLayer>& laye
     if (!(l.outer_radius > prev))
       throw std::invalid_argument("hydrostatic_profile: layer radii must increase from the centre out");
     M0 += 4.0 / 3.0 * kPi * (l.outer_radius * l.outer_radius * l.outer_radius - prev * prev * prev) *
-          reference_density(l.eos);
+          layer_reference_density(l.eos);
     prev = l.outer_radius;
   }
   // bracket the mass: at the zero-pressure mass M0 the layers are at least

@@ -18,6 +18,7 @@
 #include "rubble/physics/smoothing_length.hpp"
 #include "rubble/reference/lane_emden.hpp"
 #include "rubble/scene/flaws.hpp"
+#include "rubble/scene/layered_body.hpp"
 
 namespace rubble {
 
@@ -155,23 +156,32 @@ void apply_energy_deposits(const Scene& scene, ParticleStore<D>& ps) {
 // Weibull flaws (scene/flaws.hpp) for every free body whose material has
 // tensile damage; the body's volume is the sum of its particles' m/rho
 // (times a unit depth in 1-D and 2-D, physics/damage.hpp), its stream the
-// body's index. Walls and other materials keep 0 flaws (no damage).
+// body's index. A layered body draws per layer (its particles are stored
+// layer by layer): the layer's own material and volume, stream body index +
+// 2^32 x layer. Walls and other materials keep 0 flaws (no damage).
 template <int D>
 void draw_body_flaws(const Scene& scene, const std::vector<std::int64_t>& first, ParticleStore<D>& ps) {
   if (ps.flaw_count.empty()) return;
   for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
     const BodyConfig& b = scene.bodies[k];
-    const DamageConfig& dc = scene.materials[b.material_id].damage;
-    if (!dc.enabled || b.boundary != BoundaryKind::None) continue;
-    const std::size_t i0 = std::size_t(first[k]), n = std::size_t(first[k + 1] - first[k]);
-    double volume = 0;
-    for (std::size_t i = i0; i < i0 + n; ++i) volume += double(ps.m[i]) / double(ps.rho[i]);
-    const FlawSet f = draw_weibull_flaws(n, dc.weibull_k, dc.weibull_m, volume, std::uint64_t(dc.seed), k,
-                                           dc.min_flaws_per_particle);
-    for (std::size_t j = 0; j < n; ++j) {
-      ps.flaw_count[i0 + j] = f.count[j];
-      ps.flaw_eps_min[i0 + j] = Real(f.eps_min[j]);
-      ps.flaw_eps_max[i0 + j] = Real(f.eps_max[j]);
+    if (b.boundary != BoundaryKind::None) continue;
+    std::uint64_t run = 0;  // runs of one material within the body
+    for (std::size_t i0 = std::size_t(first[k]); i0 < std::size_t(first[k + 1]); ++run) {
+      std::size_t i1 = i0;
+      while (i1 < std::size_t(first[k + 1]) && ps.material_id[i1] == ps.material_id[i0]) ++i1;
+      const DamageConfig& dc = scene.materials[std::size_t(ps.material_id[i0])].damage;
+      if (dc.enabled) {
+        double volume = 0;
+        for (std::size_t i = i0; i < i1; ++i) volume += double(ps.m[i]) / double(ps.rho[i]);
+        const FlawSet f = draw_weibull_flaws(i1 - i0, dc.weibull_k, dc.weibull_m, volume, std::uint64_t(dc.seed),
+                                             k + (run << 32), dc.min_flaws_per_particle);
+        for (std::size_t j = 0; j < i1 - i0; ++j) {
+          ps.flaw_count[i0 + j] = f.count[j];
+          ps.flaw_eps_min[i0 + j] = Real(f.eps_min[j]);
+          ps.flaw_eps_max[i0 + j] = Real(f.eps_max[j]);
+        }
+      }
+      i0 = i1;
     }
   }
 }
@@ -189,12 +199,27 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
   check_resources<D>(scene, needs, hfact);  // before any particle is made
   const auto materials = material_params_from_scene(scene);
   std::vector<std::vector<Vec<D>>> body_points;
+  // layered bodies: their structure and shells (the particles' layers and masses)
+  std::vector<HydrostaticProfile> profiles(scene.bodies.size());
+  std::vector<ShellParticles> shells(scene.bodies.size());
   std::size_t total = 0;
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodyConfig& b = scene.bodies[i];
-    body_points.push_back(b.shape == BodyShape::Polytrope
-                              ? polytrope_points<D>(b, Polytrope(b.polytropic_index, b.mass, b.radius, scene.gravity.G))
-                              : lattice_points<D>(b));
+    if (b.shape == BodyShape::Layered) {
+      profiles[i] = layered_profile(layered_spec(scene.materials, b), scene.gravity.G);
+      shells[i] = place_on_shells(profiles[i], b.particles, b.seed);
+      std::vector<Vec<D>> pts;
+      for (const auto& x : shells[i].x) {
+        Vec<D> y;
+        for (int k = 0; k < D; ++k) y[k] = Real(b.center[k] + x[k]);
+        pts.push_back(y);
+      }
+      body_points.push_back(std::move(pts));
+    } else {
+      body_points.push_back(b.shape == BodyShape::Polytrope
+                                ? polytrope_points<D>(b, Polytrope(b.polytropic_index, b.mass, b.radius, scene.gravity.G))
+                                : lattice_points<D>(b));
+    }
     if (body_points.back().empty())
       throw InputError(scene.file, "bodies[" + std::to_string(i) + "].spacing",
                        "the body holds no particle: spacing is larger than the box");
@@ -236,6 +261,28 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
         ps.u[next] = Real(u);
         ps.h[next] = h_from_density<D>(Real(hfact), Real(m), Real(std::max(rho, 0.05 * model.rho_c)));
         if (!ps.av_alpha.empty()) ps.av_alpha[next] = initial_viscosity_alpha(materials[b.material_id]);
+        ++next;
+      }
+      continue;
+    }
+    if (b.shape == BodyShape::Layered) {
+      // each particle's mass and layer from its shell; density, pressure and
+      // internal energy from the profile on its layer's side of any boundary
+      const ShellParticles& sp = shells[i];
+      for (std::size_t j = 0; j < sp.x.size(); ++j) {
+        const double r = std::sqrt(sp.x[j][0] * sp.x[j][0] + sp.x[j][1] * sp.x[j][1] + sp.x[j][2] * sp.x[j][2]);
+        const HydrostaticState st = hydrostatic_in_layer(profiles[i], r, sp.layer[j]);
+        const int material = b.layers[std::size_t(sp.layer[j])].material_id;
+        ps.x[next] = body_points[i][j];
+        for (int k = 0; k < D; ++k) ps.v[next][k] = Real(b.velocity[k]);
+        ps.m[next] = Real(sp.m[j]);
+        ps.material_id[next] = material;
+        ps.id[next] = static_cast<std::int32_t>(next);
+        ps.rho[next] = Real(st.rho);
+        ps.u[next] = Real(st.u);
+        ps.h[next] = h_from_density<D>(Real(hfact), Real(sp.m[j]), Real(st.rho));
+        if (!ps.av_alpha.empty()) ps.av_alpha[next] = initial_viscosity_alpha(materials[material]);
+        if (!ps.boundary.empty()) ps.boundary[next] = kFreeParticle;
         ++next;
       }
       continue;
@@ -300,7 +347,7 @@ double estimated_particle_count(const Scene& scene) {
   const double pi = std::numbers::pi;
   double total = 0;
   for (const BodyConfig& b : scene.bodies) {
-    if (b.shape == BodyShape::Polytrope) {
+    if (b.shape == BodyShape::Polytrope || b.shape == BodyShape::Layered) {
       total += double(b.particles);
       continue;
     }

@@ -375,6 +375,7 @@ void check_initial_state(const Scene& scene, const ParticleStore<D>& ps, const s
   if (fault == kFaultVelocity) key += ".velocity";
   else if (fault == kFaultPosition) key += b.shape == BodyShape::Box ? ".max" : ".center";
   else if (fault == kFaultInternalEnergy) key += b.pressure >= 0 ? ".pressure" : ".internal_energy";
+  else if (b.shape == BodyShape::Layered) key += ".layers";
   else if (b.shape != BodyShape::Polytrope) key += ".density";
   else key += ".mass";
   throw InputError(scene.file, key, "the initial state is unusable: " + what);

@@ -26,6 +26,7 @@
 #include "rubble/core/error.hpp"
 #include "rubble/run.hpp"
 #include "rubble/drivers/run_physics.hpp"
+#include "rubble/scene/layered_body.hpp"
 #include "rubble/scene/scene_parser.hpp"
 
 namespace rubble {
@@ -390,7 +391,29 @@ class SceneReader {
   void read_gravity(const toml::table& t, GravityConfig& g);
   void read_collision(const toml::table& t, Scene& scene);
   BodyConfig read_polytrope_body(const std::string& p, const toml::table& t, const std::vector<MaterialConfig>& mats);
+  BodyConfig read_layered_body(const std::string& p, const toml::table& t, const std::vector<MaterialConfig>& mats);
+  // t.material: the index of a [materials] entry (required)
+  int material_index(const toml::table& t, const std::string& p, const std::vector<MaterialConfig>& mats) const;
+  double G_ = kGravitationalConstantSI;  // [gravity].G, read before the bodies
+  bool gravity_on_ = false;
 };
+
+int SceneReader::material_index(const toml::table& t, const std::string& p,
+                                const std::vector<MaterialConfig>& mats) const {
+  const auto material = string(t, "material", p);
+  if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
+  std::vector<std::string> names;
+  for (const auto& m : mats) names.push_back(m.name);
+  const auto it = std::find(names.begin(), names.end(), *material);
+  if (it == names.end()) {
+    const std::string guess = closest(*material, names);
+    fail(p + ".material",
+         "unknown material '" + *material + "'; defined materials: " + join(names) +
+             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
+         t.get("material"));
+  }
+  return static_cast<int>(it - names.begin());
+}
 
 void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) {
   const std::string p = "simulation";
@@ -1057,10 +1080,12 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   BodyConfig b;
   if (const toml::node* s = t.get("shape"); s && s->is_string() && s->as_string()->get() == "polytrope")
     return read_polytrope_body(p, t, mats);
+  if (const toml::node* s = t.get("shape"); s && s->is_string() && s->as_string()->get() == "layered")
+    return read_layered_body(p, t, mats);
   const auto shape = string(t, "shape", p);
-  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polytrope)");
+  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polytrope, layered)");
   if (*shape != "box" && *shape != "sphere" && *shape != "ring")
-    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polytrope", t.get("shape"));
+    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polytrope, layered", t.get("shape"));
   b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
@@ -1071,20 +1096,8 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
   check_keys(t, p, known);
 
-  const auto material = string(t, "material", p);
-  if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
-  std::vector<std::string> names;
-  for (const auto& m : mats) names.push_back(m.name);
-  const auto it = std::find(names.begin(), names.end(), *material);
-  if (it == names.end()) {
-    const std::string guess = closest(*material, names);
-    fail(p + ".material",
-         "unknown material '" + *material + "'; defined materials: " + join(names) +
-             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
-         t.get("material"));
-  }
-  b.material = *material;
-  b.material_id = static_cast<int>(it - names.begin());
+  b.material_id = material_index(t, p, mats);
+  b.material = mats[std::size_t(b.material_id)].name;
 
   if (round) {
     // sphere (a disk in 2-D) or ring (annulus in 2-D, shell in 3-D)
@@ -1349,22 +1362,10 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
              {"shape", "material", "center", "radius", "mass", "polytropic_index", "particles", "lattice", "velocity"});
   if (dim_ != 3) fail(p + ".shape", "'polytrope' needs simulation.dimension = 3", t.get("shape"));
 
-  const auto material = string(t, "material", p);
-  if (!material) fail(p + ".material", "missing required key (the name of a [materials] entry)");
-  std::vector<std::string> names;
-  for (const auto& m : mats) names.push_back(m.name);
-  const auto it = std::find(names.begin(), names.end(), *material);
-  if (it == names.end()) {
-    const std::string guess = closest(*material, names);
-    fail(p + ".material",
-         "unknown material '" + *material + "'; defined materials: " + join(names) +
-             (guess.empty() ? "" : " (did you mean '" + guess + "'?)"),
-         t.get("material"));
-  }
-  b.material = *material;
-  b.material_id = static_cast<int>(it - names.begin());
+  b.material_id = material_index(t, p, mats);
+  b.material = mats[std::size_t(b.material_id)].name;
   if (mats[b.material_id].eos != EosKind::IdealGas)
-    fail(p + ".material", "a polytrope needs an ideal_gas material (material '" + *material + "' is not)",
+    fail(p + ".material", "a polytrope needs an ideal_gas material (material '" + b.material + "' is not)",
          t.get("material"));
 
   if (auto c = vector(t, "center", p)) b.center = *c;
@@ -1384,6 +1385,101 @@ BodyConfig SceneReader::read_polytrope_body(const std::string& p, const toml::ta
   b.lattice = choice(t, "lattice", p, Lattice::HexagonalClosePacked,
                      {{"cubic", Lattice::Cubic}, {"hcp", Lattice::HexagonalClosePacked}});
   if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  for (int a = 0; a < 3; ++a) {
+    b.min[a] = b.center[a] - b.radius;
+    b.max[a] = b.center[a] + b.radius;
+  }
+  return b;
+}
+
+// shape = "layered": a differentiated body in hydrostatic equilibrium
+// (docs/scene.md; scene/layered_body.hpp). The structure is computed here,
+// so a body that has none is refused with its key, and radius and mass are
+// known to what follows (the [collision] set-up, the overlap check).
+BodyConfig SceneReader::read_layered_body(const std::string& p, const toml::table& t,
+                                          const std::vector<MaterialConfig>& mats) {
+  BodyConfig b;
+  b.shape = BodyShape::Layered;
+  check_keys(t, p, {"shape", "center", "layers", "mass", "particles", "velocity", "seed"});
+  if (dim_ != 3) fail(p + ".shape", "'layered' needs simulation.dimension = 3", t.get("shape"));
+  if (!gravity_on_)
+    fail(p + ".shape", "a layered body is held together by its own gravity: it needs a [gravity] table "
+                       "(mode = \"direct\" or \"barnes_hut\")", t.get("shape"));
+  if (auto c = vector(t, "center", p)) b.center = *c;
+  if (auto v = vector(t, "velocity", p)) b.velocity = *v;
+  const auto n = integer(t, "particles", p);
+  if (!n) fail(p + ".particles", "missing required key (the approximate number of particles, >= 100)");
+  if (*n < 100 || *n > 1'000'000'000)
+    fail(p + ".particles", "is " + std::to_string(*n) + ", must be in [100, 1e9]", t.get("particles"));
+  b.particles = *n;
+  if (auto seed = integer(t, "seed", p)) {
+    if (*seed < 0) fail(p + ".seed", "is " + std::to_string(*seed) + ", must be >= 0", t.get("seed"));
+    b.seed = std::uint64_t(*seed);
+  }
+
+  const std::string lp = p + ".layers";
+  const toml::node* ln = t.get("layers");
+  if (!ln) fail(lp, "missing required key (the layers from the centre out, e.g. [{ material = \"iron\", radius = 3e5 }, "
+                    "{ material = \"basalt\", radius = 6e5 }])");
+  const toml::array* arr = ln->as_array();
+  if (!arr || arr->empty()) fail(lp, "expected a non-empty array of tables, got " + type_name(*ln), ln);
+  bool by_radius = false;
+  double fraction_sum = 0, previous = 0;
+  for (std::size_t k = 0; k < arr->size(); ++k) {
+    const std::string q = lp + "[" + std::to_string(k) + "]";
+    const toml::table* lt = (*arr)[k].as_table();
+    if (!lt) fail(q, "expected a table { material = ..., radius = ... } or { material = ..., mass_fraction = ... }, got " +
+                         type_name((*arr)[k]), &(*arr)[k]);
+    check_keys(*lt, q, {"material", "radius", "mass_fraction"});
+    LayerConfig layer;
+    layer.material_id = material_index(*lt, q, mats);
+    const MaterialConfig& m = mats[std::size_t(layer.material_id)];
+    layer.material = m.name;
+    if (m.eos != EosKind::Murnaghan && m.eos != EosKind::Tillotson)
+      fail(q + ".material", "material '" + m.name + "' has an ideal-gas EOS, which has no density at zero pressure "
+                            "(a layer needs murnaghan or tillotson)", lt->get("material"));
+    if (m.porosity.enabled)
+      fail(q + ".material", "material '" + m.name + "' is porous; the hydrostatic set-up does not handle p-alpha "
+                            "porosity yet (use a non-porous material for the layer)", lt->get("material"));
+    const bool has_r = lt->contains("radius"), has_f = lt->contains("mass_fraction");
+    if (has_r == has_f) fail(q, "give exactly one of radius (the layer's outer radius [m]) and mass_fraction", &(*arr)[k]);
+    if (k == 0) by_radius = has_r;
+    else if (has_r != by_radius)
+      fail(q, std::string("layers[0] gives ") + (by_radius ? "a radius" : "a mass_fraction") +
+                  "; every layer must give the same", &(*arr)[k]);
+    if (has_r) {
+      layer.radius = required_number(*lt, "radius", q, "the layer's outer radius [m]");
+      require(layer.radius > previous, *lt, "radius", q, layer.radius,
+              k == 0 ? "> 0" : "> the radius of the layer below (" + fmt(previous) + ")");
+      previous = layer.radius;
+    } else {
+      layer.mass_fraction = required_number(*lt, "mass_fraction", q, "the layer's fraction of the body's mass");
+      require(layer.mass_fraction > 0 && layer.mass_fraction <= 1, *lt, "mass_fraction", q, layer.mass_fraction, "in (0, 1]");
+      fraction_sum += layer.mass_fraction;
+    }
+    b.layers.push_back(layer);
+  }
+  if (by_radius) {
+    if (t.contains("mass"))
+      fail(p + ".mass", "the layers give their radii, which fix the mass; give mass only with mass_fraction layers",
+           t.get("mass"));
+  } else {
+    b.mass = required_number(t, "mass", p, "the body's total mass [kg], > 0 (the layers give mass fractions)");
+    require(b.mass > 0, t, "mass", p, b.mass, "> 0");
+    if (std::fabs(fraction_sum - 1) > 1e-6)
+      fail(lp, "the mass fractions add up to " + fmt(fraction_sum) + ", not 1", ln);
+    for (LayerConfig& layer : b.layers) layer.mass_fraction /= fraction_sum;
+  }
+  try {
+    const HydrostaticProfile pr = layered_profile(layered_spec(mats, b), G_);
+    b.radius = pr.layer_radius.back();
+    if (by_radius) b.mass = pr.mass;
+  } catch (const std::exception& e) {
+    fail(lp, std::string("no hydrostatic structure: ") + e.what() +
+                 " (a body too massive for its materials' EOS, or a layer too thin?)", ln);
+  }
+  b.material_id = b.layers.back().material_id;
+  b.material = b.layers.back().material;
   for (int a = 0; a < 3; ++a) {
     b.min[a] = b.center[a] - b.radius;
     b.max[a] = b.center[a] + b.radius;
@@ -1466,6 +1562,8 @@ Scene SceneReader::read(const toml::table& root) {
   check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits", "collision"});
   read_simulation(root, scene.simulation);
   if (const toml::table* g = table(root, "gravity", "")) read_gravity(*g, scene.gravity);
+  G_ = scene.gravity.G;
+  gravity_on_ = scene.gravity.mode != GravityMode::Off;
 
   // Materials, in declaration order (toml++ keeps tables sorted by key, so
   // order by source position; ones created by --set come last).

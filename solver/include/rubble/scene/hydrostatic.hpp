@@ -1,6 +1,6 @@
 #pragma once
 // Hydrostatic structure of a layered, self-gravitating sphere (issue #52
-// item 1, the profile part; the particle placement on it is still to come).
+// item 1, the profile; the particles on it: scene/layered_body.hpp).
 // Given the layers from the centre out (each a material's EOS and its outer
 // radius), the radial profiles m(r), p(r), rho(r), u(r) that satisfy
 //
@@ -41,6 +41,7 @@ struct HydrostaticProfile {
   std::vector<int> layer;                // each sample's layer (0 = innermost)
   double mass = 0;                       // total mass [kg]
   std::vector<double> layer_mass;        // by layer [kg]
+  std::vector<double> layer_radius;      // each layer's outer radius [m]
   double centre_pressure = 0;            // [Pa]
   double centre_mass_residual = 0;       // m at the centre / mass (the shooting's miss)
 };
@@ -51,6 +52,11 @@ struct HydrostaticProfile {
 // std::runtime_error when no mass makes m vanish at the centre.
 HydrostaticProfile hydrostatic_profile(const std::vector<HydrostaticLayer>& layers, double G,
                                        int steps_per_layer = 2000);
+
+// The density of a layer's material at p = 0 and u = 0 (its surface
+// density; Murnaghan and Tillotson: rho0). Throws std::invalid_argument for
+// an ideal gas, which has none.
+double layer_reference_density(const EosParams& eos);
 
 // The profile's pressure, density and internal energy at radius r (linear
 // interpolation between samples; r within the body).

@@ -163,7 +163,9 @@ struct MaterialConfig {
 
 // Box: min..max. Sphere (a disk in 2-D, a segment in 1-D): center, radius.
 // Ring (2-D annulus, 3-D spherical shell): center, inner_radius..radius.
-enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3 };
+// Layered: a differentiated 3-D body in hydrostatic equilibrium, particles
+// on nested shells (scene/layered_body.hpp).
+enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3, Layered = 4 };
 enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
 // Boundary particles (walls, clamps): not integrated, but neighbours of the
 // others with their own state. Fixed: at rest; moving: with the body's
@@ -180,6 +182,15 @@ enum class WallSlip : int { NoSlip = 0, FreeSlip = 1, Coulomb = 2 };
 inline const char* wall_slip_name(WallSlip s) {
   return s == WallSlip::FreeSlip ? "free_slip" : s == WallSlip::Coulomb ? "coulomb" : "no_slip";
 }
+
+// One layer of a shape = "layered" body: its material and either its outer
+// radius or its mass fraction (the same for every layer of the body).
+struct LayerConfig {
+  std::string material;
+  int material_id = 0;
+  double radius = 0;         // [m] outer radius (> 0), or 0 when mass fractions are given
+  double mass_fraction = 0;  // (> 0), or 0 when radii are given
+};
 
 struct BodyConfig {
   BodyShape shape = BodyShape::Box;
@@ -225,7 +236,13 @@ struct BodyConfig {
   double inner_radius = 0;         // [m] (ring)
   double mass = 0;                 // [kg] total mass M (> 0)
   double polytropic_index = 1;     // n, 0 < n < 5
-  std::int64_t particles = 0;      // approximate number of particles
+  std::int64_t particles = 0;      // approximate number of particles (polytrope, layered)
+  // shape = "layered" (3-D only): the layers from the centre out. The parser
+  // computes the structure (scene/layered_body.hpp) and fills radius, mass
+  // (the body's, whichever way the layers were given), min/max (centre -/+
+  // radius) and material/material_id (the outermost layer's).
+  std::vector<LayerConfig> layers;
+  std::uint64_t seed = 1;          // the shells' random rotations (layered)
 };
 
 struct DomainConfig {
