@@ -149,6 +149,13 @@ CollisionSetup place_collision(const Scene& scene, ParticleStore<D>& ps, const s
     } catch (const std::invalid_argument& e) {
       throw InputError(scene.file, "collision", e.what());
     }
+    // held in place while the run relaxes the bodies, launched after it
+    const bool held = scene.simulation.damping_time > 0;
+    out.held = held;
+    for (int k = 0; k < 3; ++k) {
+      out.velocity_target[k] = -im.m / M * o.v_start[k];
+      out.velocity_impactor[k] = t.m / M * o.v_start[k];
+    }
     // barycentric: the target at -(M_i/M) r, the impactor at +(M_t/M) r
     // and each spinning rigidly about its own centre of mass: v += w x (x - com)
     auto move = [&](const Group& g, double share, const std::array<double, 3>& w) {
@@ -157,7 +164,7 @@ CollisionSetup place_collision(const Scene& scene, ParticleStore<D>& ps, const s
         const double spin[3] = {w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]};
         for (int k = 0; k < 3; ++k) {
           ps.x[i][k] += Real(share * o.x_start[k] - g.com[k]);
-          ps.v[i][k] += Real(share * o.v_start[k] + spin[k]);
+          if (!held) ps.v[i][k] += Real(share * o.v_start[k] + spin[k]);
         }
       }
     };
@@ -178,9 +185,10 @@ std::string collision_report(const CollisionSetup& c) {
   std::snprintf(buf, sizeof buf,
                 "collision: target %.4g kg (R = %.4g m), impactor %.4g kg (R = %.4g m); v_esc = %.4g m/s, "
                 "impact at %.4g m/s (%.4g v_esc) and %.4g deg; start %.4g m apart (%.4g touching distances), "
-                "contact at t = %.4g s",
+                "contact %.4g s after the launch%s",
                 c.mass_target, c.radius_target, c.mass_impactor, c.radius_impactor, o.v_esc, o.v_contact,
-                o.v_contact / o.v_esc, o.angle * 180 / kPi, o.r_start, o.r_start / o.r_contact, o.time_to_contact);
+                o.v_contact / o.v_esc, o.angle * 180 / kPi, o.r_start, o.r_start / o.r_contact, o.time_to_contact,
+                c.held ? " (held in place and relaxed until simulation.damping_end, then launched)" : " (at t = 0)");
   return buf;
 }
 

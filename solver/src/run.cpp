@@ -58,7 +58,47 @@ struct LoopStart {
   bool resumed = false;
   std::filesystem::path from_dir;  // the restart snapshot's directory
   EnergyBooks books;               // the energy bookkeeping so far
+  CollisionSetup collision;        // [collision]: held = launched at damping_end
 };
+
+// Relaxation in each body's own frame (simulation.damping_frame = "body"):
+// each free body's velocities about its mean velocity times f; the bodies
+// of a held [collision] are also held in place (mean velocity -> 0).
+template <int D, class Stepper>
+void damp_each_body(Stepper& sys, const Scene& scene, const std::vector<std::int64_t>& first, double f, bool held) {
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    if (scene.bodies[b].boundary != BoundaryKind::None) continue;
+    const auto lo = std::int32_t(first[b]), hi = std::int32_t(first[b + 1]);
+    const BodySums<D> s = sys.body_sums(lo, hi);
+    if (!(s.m > 0)) continue;
+    const Vec<D> mean = s.mv * Real(1 / s.m);
+    const auto& c = scene.collision.target;
+    const auto& i = scene.collision.impactor;
+    const bool hold = held && (std::find(c.begin(), c.end(), int(b)) != c.end() ||
+                               std::find(i.begin(), i.end(), int(b)) != i.end());
+    sys.damp_body(lo, hi, f, mean, hold ? Vec<D>{} : mean);
+  }
+}
+
+// The launch of a held [collision] at damping_end: each body of the target
+// and of the impactor gets its side's orbital velocity and spin about the
+// side's centre of mass as it is now.
+template <int D, class Stepper>
+void launch_collision(Stepper& sys, const Scene& scene, const CollisionSetup& setup,
+                      const std::vector<std::int64_t>& first) {
+  auto launch = [&](const std::vector<int>& bodies, const std::array<double, 3>& v, const std::array<double, 3>& w) {
+    BodySums<D> g;
+    for (int b : bodies) g = BodySumOp<D>{}(g, sys.body_sums(std::int32_t(first[b]), std::int32_t(first[b + 1])));
+    const Vec<D> com = g.mx * Real(1 / g.m);
+    Vec<D> V;
+    Vec<3> spin;
+    for (int k = 0; k < D; ++k) V[k] = Real(v[k]);
+    for (int k = 0; k < 3; ++k) spin[k] = Real(w[k]);
+    for (int b : bodies) sys.add_body_velocity(std::int32_t(first[b]), std::int32_t(first[b + 1]), V, spin, com);
+  };
+  launch(scene.collision.target, setup.velocity_target, scene.collision.spin_target);
+  launch(scene.collision.impactor, setup.velocity_impactor, scene.collision.spin_impactor);
+}
 
 // The loop's own state beyond the particles, as a snapshot records it.
 struct LoopState {
@@ -521,8 +561,18 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       t_step += since(t0);
       t += dt;
       ++step;
-      // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau).
-      if (damped) sys.damp(std::exp(-dt / sim.damping_time));
+      // Relaxation (simulation.damping_time, damping_end): v *= exp(-dt/tau),
+      // every velocity or each body's about its own mean ("body"); a held
+      // [collision] is launched when the damped phase ends
+      if (damped) {
+        const double f = std::exp(-dt / sim.damping_time);
+        if (sim.damping_frame == DampingFrame::Body) damp_each_body<D>(sys, scene, body_first, f, start.collision.held);
+        else sys.damp(f);
+        if (start.collision.held && t >= sim.damping_end * (1 - 1e-12)) {
+          launch_collision<D>(sys, scene, start.collision, body_first);
+          if (!opt.quiet) std::fprintf(stderr, "rubble: t = %g s: relaxation over, the bodies launched\n", t);
+        }
+      }
 
       // checked where the state lives (a device reduction on the CUDA backend):
       // the host copy is fetched only for a snapshot, a diagnostic or the end
@@ -650,6 +700,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
   if (opt.restart_from.empty()) {
     CollisionSetup collision;
     body_first = generate_bodies<D>(scene, hfact, needs, ps, &collision);
+    start.collision = collision;
     check_initial_state<D>(scene, ps, body_first);  // x, v, rho, h, u as generated
     if (scene.collision.enabled && !opt.quiet) std::fprintf(stderr, "rubble: %s\n", collision_report(collision).c_str());
     for (const std::string& w : check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact))
@@ -675,6 +726,11 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
       throw InputError(opt.restart_from, "simulation.end_time",
                        "the snapshot is at t = " + fmt_g(meta.time) + " s, not before end_time = " + fmt_g(sim.end_time) +
                            " s: nothing to integrate (extend the run with --set simulation.end_time=T)");
+    if (scene.collision.enabled && sim.damping_time > 0 && meta.time < sim.damping_end * (1 - 1e-12))
+      throw InputError(opt.restart_from, "simulation.damping_end",
+                       "the snapshot is at t = " + fmt_g(meta.time) + " s, before the [collision]'s launch at damping_end = " +
+                           fmt_g(sim.damping_end) + " s; resuming during the relaxation is not supported yet: "
+                           "run the scene again from the start");
     start.t = meta.time;
     start.step = meta.step;
     start.dt_proposal = meta.restart.dt_proposal;

@@ -421,7 +421,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end",
+              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end", "damping_frame",
               "kernel_correction", "stress_update", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
@@ -495,6 +495,8 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
     s.damping_time = *damping_time;
     s.damping_end = *damping_end;
   }
+  s.damping_frame = choice(*t, "damping_frame", p, DampingFrame::Global,
+                           {{"global", DampingFrame::Global}, {"body", DampingFrame::Body}});
   if (auto b = boolean(*t, "kernel_correction", p)) s.kernel_correction = *b;
   s.stress_update = choice(*t, "stress_update", p, StressUpdate::Predicted,
                            {{"predicted", StressUpdate::Predicted}, {"staggered", StressUpdate::Staggered}});
@@ -1609,6 +1611,15 @@ Scene SceneReader::read(const toml::table& root) {
     }
   }
   if (const toml::table* c = table(root, "collision", "")) read_collision(*c, scene);
+  // A [collision] relaxes its bodies in their own frames, held in place, and
+  // launches them at damping_end (global damping would damp the orbit).
+  if (scene.collision.enabled && scene.simulation.damping_time > 0) {
+    const toml::table* st = table(root, "simulation", "");
+    if (st && st->contains("damping_frame") && scene.simulation.damping_frame != DampingFrame::Body)
+      fail("simulation.damping_frame", "a [collision] relaxes each body in its own frame and launches it at "
+                                       "damping_end: use \"body\" (or leave the key out)", st->get("damping_frame"));
+    scene.simulation.damping_frame = DampingFrame::Body;
+  }
   const toml::table* out_table = table(root, "output", "");
   if (out_table) read_output(*out_table, scene.output);
   // Resource guards (issue #13): a bounded number of snapshots, and a

@@ -1022,6 +1022,23 @@ void CudaStepper<D>::damp(double f) {
   impl_->steps.damp(Real(f));
 }
 
+template <int D>
+BodySums<D> CudaStepper<D>::body_sums(std::int32_t lo, std::int32_t hi) {
+  return impl_->steps.body_sums(lo, hi);
+}
+
+template <int D>
+void CudaStepper<D>::damp_body(std::int32_t lo, std::int32_t hi, double f, Vec<D> mean, Vec<D> keep) {
+  impl_->host_current = false;
+  impl_->steps.damp_body(lo, hi, Real(f), mean, keep);
+}
+
+template <int D>
+void CudaStepper<D>::add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre) {
+  impl_->host_current = false;
+  impl_->steps.add_body_velocity(lo, hi, V, w, centre);
+}
+
 // With the next step's time-step limit (StepSequence::check_state): the
 // loop asks for both of the same state.
 template <int D>

@@ -15,6 +15,7 @@
 #include "rubble/core/box.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_log.hpp"
+#include "rubble/io/conserved_sums.hpp"
 #include "rubble/particles/particle_store.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/scene.hpp"
@@ -40,6 +41,10 @@ class CudaStepper {
   void leapfrog(double dt);
   Rk2Result rk2(double dt, double tol, double dt_min);
   void damp(double f);
+  // Bodies as wholes (relaxation in a body's frame, the launch of a collision).
+  BodySums<D> body_sums(std::int32_t lo, std::int32_t hi);
+  void damp_body(std::int32_t lo, std::int32_t hi, double f, Vec<D> mean, Vec<D> keep);
+  void add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre);
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   // The energy bookkeeping (StepSequence): books, watchdog retries.

@@ -128,6 +128,14 @@ class CpuStepper {
   void leapfrog(double dt) { steps_.leapfrog(Real(dt)); }
   Rk2Result rk2(double dt, double tol, double dt_min) { return steps_.rk2(Real(dt), Real(tol), Real(dt_min)); }
   void damp(double f) { steps_.damp(Real(f)); }
+  // Bodies as wholes (relaxation in a body's frame, the launch of a collision).
+  BodySums<D> body_sums(std::int32_t lo, std::int32_t hi) { return steps_.body_sums(lo, hi); }
+  void damp_body(std::int32_t lo, std::int32_t hi, double f, Vec<D> mean, Vec<D> keep) {
+    steps_.damp_body(lo, hi, Real(f), mean, keep);
+  }
+  void add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre) {
+    steps_.add_body_velocity(lo, hi, V, w, centre);
+  }
   // Index of the first particle with a non-finite state, or n.
   std::size_t first_non_finite() { return steps_.check_state().first_bad; }
   ConservedRecord conserved(double t, std::int64_t step, double dt) const {

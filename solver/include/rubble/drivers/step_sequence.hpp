@@ -100,6 +100,17 @@ struct CountSum {
 struct DoubleSum {
   RUBBLE_HD double operator()(double a, double b) const { return a + b; }
 };
+// The velocity of a rigid motion at r from its centre: V + w x r (w in 3-D only).
+template <int D>
+RUBBLE_HD inline Vec<D> rigid_velocity(Vec<D> V, const Vec<3>& w, const Vec<D>& r) {
+  if constexpr (D == 3) {
+    V[0] += w[1] * r[2] - w[2] * r[1];
+    V[1] += w[2] * r[0] - w[0] * r[2];
+    V[2] += w[0] * r[1] - w[1] * r[0];
+  }
+  return V;
+}
+
 struct EnergySumOp {
   RUBBLE_HD EnergySums operator()(const EnergySums& a, const EnergySums& b) const { return a + b; }
 };
@@ -228,6 +239,46 @@ class StepSequence {
     energy_known_ = false;
     const StoreView<D> s = view();
     be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.v[i] *= f; });
+  }
+
+  // ---- bodies as wholes: relaxation in each body's own frame and the
+  // launch of a [collision] after it (issue #52 item 2). A body is the
+  // particles whose id lies in [lo, hi) (the body_first ranges).
+  BodySums<D> body_sums(std::int32_t lo, std::int32_t hi) {
+    const StoreView<D> s = view();
+    return be_.reduce(
+        size(),
+        [=] RUBBLE_LAMBDA(std::uint32_t i) {
+          BodySums<D> r;
+          if (s.id[i] < lo || s.id[i] >= hi) return r;
+          r.m = double(s.m[i]);
+          for (int k = 0; k < D; ++k) {
+            r.mx[k] = Real(double(s.m[i]) * double(s.x[i][k]));
+            r.mv[k] = Real(double(s.m[i]) * double(s.v[i][k]));
+          }
+          return r;
+        },
+        BodySums<D>{}, BodySumOp<D>{});
+  }
+  // The body's velocities about its mean velocity `mean` times f, about
+  // `keep`: v = keep + f (v - mean) (keep = mean: damped in its own frame;
+  // keep = 0: also held in place).
+  void damp_body(std::int32_t lo, std::int32_t hi, Real f, Vec<D> mean, Vec<D> keep) {
+    dt_known_ = false;
+    energy_known_ = false;
+    const StoreView<D> s = view();
+    be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) {
+      if (s.id[i] >= lo && s.id[i] < hi) s.v[i] = keep + f * (s.v[i] - mean);
+    });
+  }
+  // Adds a rigid motion to the body: v += V + w x (x - centre) (w in 3-D only).
+  void add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre) {
+    dt_known_ = false;
+    energy_known_ = false;
+    const StoreView<D> s = view();
+    be_.for_each("launch", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) {
+      if (s.id[i] >= lo && s.id[i] < hi) s.v[i] = s.v[i] + rigid_velocity<D>(V, w, s.x[i] - centre);
+    });
   }
 
   // ---- energy bookkeeping (issue #50 items 1 and 2)

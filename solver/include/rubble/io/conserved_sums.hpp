@@ -78,6 +78,23 @@ RUBBLE_HD_INLINE ConservedSums conserved_particle(const StoreView<D>& s, std::si
   return r;
 }
 
+// Mass and mass-weighted position and velocity of a body (StepSequence::body_sums).
+template <int D>
+struct BodySums {
+  double m = 0;
+  Vec<D> mx{}, mv{};
+};
+template <int D>
+struct BodySumOp {
+  RUBBLE_HD BodySums<D> operator()(const BodySums<D>& a, const BodySums<D>& b) const {
+    BodySums<D> r;
+    r.m = a.m + b.m;
+    r.mx = a.mx + b.mx;
+    r.mv = a.mv + b.mv;
+    return r;
+  }
+};
+
 // The energy watchdog's sums (drivers/step_sequence.hpp): the total energy
 // and the energy scale its bound is a fraction of.
 struct EnergySums {

@@ -32,6 +32,7 @@ struct StoreView {
   std::size_t n = 0;
   Real* m = nullptr;
   std::int32_t* material_id = nullptr;
+  std::int32_t* id = nullptr;  // the particle's number at generation (its body: body_first ranges)
   Vec<D>* x = nullptr;
   Vec<D>* v = nullptr;
   Real* u = nullptr;
@@ -82,7 +83,7 @@ struct StoreView {
         }
       }
     };
-    set(m, "m"), set(material_id, "material_id"), set(x, "x"), set(v, "v"), set(u, "u"), set(rho, "rho");
+    set(m, "m"), set(material_id, "material_id"), set(id, "id"), set(x, "x"), set(v, "v"), set(u, "u"), set(rho, "rho");
     set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
     set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");

@@ -65,6 +65,11 @@ struct CollisionSetup {
   double mass_target = 0, mass_impactor = 0;      // discretised [kg]
   double radius_target = 0, radius_impactor = 0;  // [m]
   CollisionOrbit orbit;
+  // Held for a relaxation (simulation.damping_time with [collision]): the
+  // bodies were moved to the start but left at rest; launch_collision gives
+  // them these velocities (and the scene's spins) at damping_end.
+  bool held = false;
+  std::array<double, 3> velocity_target{}, velocity_impactor{};
 };
 
 // Moves and launches the [collision]'s bodies in the generated store: the
@@ -72,7 +77,9 @@ struct CollisionSetup {
 // the barycentric frame of the two, their particles' velocities to the
 // orbit's (the bodies start at rest). A body's radius is the largest
 // distance of its particles from its centre of mass plus half its spacing
-// (the polytrope's own radius). No-op without a [collision] table.
+// (the polytrope's and the layered body's own radius). No-op without a
+// [collision] table. With a relaxation (simulation.damping_time) the bodies
+// are moved but not launched: held = true, velocities in the setup.
 template <int D>
 CollisionSetup place_collision(const Scene& scene, ParticleStore<D>& ps, const std::vector<std::int64_t>& body_first);
 

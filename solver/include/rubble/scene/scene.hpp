@@ -26,6 +26,8 @@ enum class Integrator : int { RK2Adaptive = 0, Leapfrog = 1 };
 // the half-step velocity before the forces (the central-difference scheme).
 enum class StressUpdate : int { Predicted = 0, Staggered = 1 };
 
+enum class DampingFrame : int { Global = 0, Body = 1 };
+
 struct SimulationConfig {
   int dimension = 0;                        // 1, 2 or 3 (required)
   double end_time = 0;                      // [s] (required, > 0)
@@ -53,6 +55,11 @@ struct SimulationConfig {
   // every step multiplies v by exp(-dt / damping_time). 0 = off.
   double damping_time = 0;                  // [s]
   double damping_end = 0;                   // [s]
+  // damping_frame: "global" damps every velocity; "body" damps each body's
+  // velocities about its own mean velocity (its motion as a whole is kept).
+  // With [collision] it is "body" and the colliding bodies are held in place
+  // while damped, then launched onto their orbit at damping_end.
+  DampingFrame damping_frame = DampingFrame::Global;
   // Solids: kernel-gradient correction of the velocity gradient
   // (Randles & Libersky 1996); off by default.
   bool kernel_correction = false;
