@@ -105,7 +105,13 @@ struct Check {
   double threshold;
   std::string op;  // "<=" or ">="
   std::string source;
-  bool passed() const { return op == "<=" ? value <= threshold : value >= threshold; }
+  bool passed() const {
+    if (op == "<=") return value <= threshold;
+    if (op == "<") return value < threshold;
+    if (op == ">=") return value >= threshold;
+    if (op == ">") return value > threshold;
+    return false;  // an unknown comparison passes nothing
+  }
   Json json() const {
     return Json::object({{"name", name}, {"value", value}, {"threshold", threshold}, {"op", op},
                          {"source", source}, {"passed", passed()}});
