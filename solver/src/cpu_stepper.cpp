@@ -141,7 +141,7 @@ bool CpuBackend<D>::hydro_pair_once(const RhsContext<D>& c) {
     }
     for (std::size_t a = lo; a < hi; ++a) {
       const std::uint32_t ia = static_cast<std::uint32_t>(a);
-      const HydroSide<D> sa = hydro_side<D>(c.kernel, hydro_particle<D>(c, ia));
+      const HydroSide<D> sa = hydro_side<D>(c.kernel, hydro_particle<D>(c, ia), false, c.geometric_force);
       Vec<D> dvdt = Vec<D>::zero();
       Real dudt = 0, drhodt = 0, mu_max = 0;
       nbrs_.for_each(a, [&](std::uint32_t b) {
@@ -150,7 +150,7 @@ bool CpuBackend<D>::hydro_pair_once(const RhsContext<D>& c) {
         const Vec<D> dx = c.domain.separation(s.x[a], s.x[b]);
         const Real h_max = sa.q.h > s.h[b] ? sa.q.h : s.h[b];
         if (norm2(dx) >= h_max * h_max) return;  // in the search skin only
-        const HydroSide<D> sb = hydro_side<D>(c.kernel, hydro_particle<D>(c, b), !mine);
+        const HydroSide<D> sb = hydro_side<D>(c.kernel, hydro_particle<D>(c, b), !mine, c.geometric_force);
         const HydroPairTerms<D> terms = hydro_pair_terms<D>(sa, sb, dx, continuity);
         const HydroPairRates<D> ra = hydro_pair_rates_a<D>(terms, sa, sb);
         dvdt += ra.dvdt;

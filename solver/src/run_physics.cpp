@@ -127,6 +127,7 @@ RunPhysics run_physics(const Scene& scene) {
   r.xsph_epsilon = Real(sim.xsph);
   r.shifting = Real(sim.shifting);
   r.density_step_fraction = Real(sim.density_step_fraction);
+  r.geometric_force = sim.pressure_force == PressureForce::Geometric;
   r.energy_step_tolerance = sim.energy_step_tolerance >= 0 ? sim.energy_step_tolerance : sim.courant * sim.courant;
   for (int k = 0; k < 3; ++k) r.body_force[k] = Real(sim.gravity[k]);
   r.gravity = scene.gravity;

@@ -421,7 +421,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end", "damping_frame",
+              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end", "damping_frame", "pressure_force",
               "kernel_correction", "stress_update", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
@@ -497,6 +497,8 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   }
   s.damping_frame = choice(*t, "damping_frame", p, DampingFrame::Global,
                            {{"global", DampingFrame::Global}, {"body", DampingFrame::Body}});
+  s.pressure_force = choice(*t, "pressure_force", p, PressureForce::Standard,
+                            {{"standard", PressureForce::Standard}, {"geometric", PressureForce::Geometric}});
   if (auto b = boolean(*t, "kernel_correction", p)) s.kernel_correction = *b;
   s.stress_update = choice(*t, "stress_update", p, StressUpdate::Predicted,
                            {{"predicted", StressUpdate::Predicted}, {"staggered", StressUpdate::Staggered}});
@@ -1662,6 +1664,18 @@ Scene SceneReader::read(const toml::table& root) {
            "material '" + m.name + "' is a solid (shear_modulus > 0), which needs density = \"continuity\"",
            sim_table->get("density"));
     scene.simulation.density = DensityForm::Continuity;
+  }
+
+  // The geometric pressure force is written for continuity density and the
+  // fluid equations (physics/hydro.hpp); a solid's stress passes keep theirs.
+  if (scene.simulation.pressure_force == PressureForce::Geometric) {
+    const toml::node* at = sim_table ? sim_table->get("pressure_force") : nullptr;
+    if (scene.simulation.density != DensityForm::Continuity)
+      fail("simulation.pressure_force", "\"geometric\" needs simulation.density = \"continuity\"", at);
+    for (const MaterialConfig& m : scene.materials)
+      if (m.shear_modulus > 0)
+        fail("simulation.pressure_force", "\"geometric\" is for fluids; material '" + m.name +
+                                              "' is a solid (shear_modulus > 0), whose stress passes keep the standard form", at);
   }
 
   // The viscosity switch is evolved by the hydro force loop only; a scene

@@ -162,3 +162,18 @@ TEST(LayeredBody, BadLayersAreRefusedWithTheirKey) {
   no_gravity.erase(no_gravity.find("[gravity]"), std::string("[gravity]\nmode = \"direct\"\n").size());
   expect_scene_error(no_gravity, "bodies[0].shape", "[gravity]");
 }
+
+// simulation.pressure_force = "geometric" (physics/hydro.hpp) is for fluids
+// with continuity density.
+TEST(PressureForce, GeometricNeedsContinuityAndFluids) {
+  const std::string base = "[simulation]\ndimension = 1\nend_time = 1.0\npressure_force = \"geometric\"\n";
+  const std::string body = "[[bodies]]\nshape = \"box\"\nmaterial = \"m\"\nmin = [0.0]\nmax = [1.0]\nspacing = 0.1\n"
+                           "density = 2700.0\ninternal_energy = 0.0\n";
+  const std::string fluid = "[materials.m]\nlibrary = \"basalt\"\n";
+  EXPECT_EQ(test::parse_error(base + fluid + body), "");
+  expect_scene_error(base + "density = \"summation\"\n" + fluid + body, "simulation.pressure_force", "continuity");
+  expect_scene_error(base + "[materials.m]\nlibrary = \"basalt\"\nshear_modulus = 2.27e10\n" + body,
+                     "simulation.pressure_force", "solid");
+  expect_scene_error("[simulation]\ndimension = 1\nend_time = 1.0\npressure_force = \"gdf\"\n" + fluid + body,
+                     "simulation.pressure_force", "unknown value");
+}

@@ -53,6 +53,7 @@ struct RhsContext {
   KernelType kernel = KernelType::CubicSpline;
   Real hfact = 0;
   bool summation = false;          // summation density (grad-h terms) or continuity
+  bool geometric_force = false;    // continuity: the geometric pressure force (physics/hydro.hpp)
   bool kernel_correction = false;  // solids: corrected velocity gradient
   bool stress_diffusion = false;   // solids: a material diffuses its deviator (stress_diffusion.hpp)
   Mat<D>* art_R = nullptr;         // solids with artificial stress: R_a (scratch)
@@ -561,7 +562,7 @@ RUBBLE_HD_INLINE void viscosity_switch_end_step_particle(const RhsContext<D>& c,
 template <int D, class Each>
 RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t a, Each&& each) {
   const StoreView<D>& s = c.s;
-  const HydroSide<D> pa = hydro_side<D>(c.kernel, hydro_particle<D>(c, a));
+  const HydroSide<D> pa = hydro_side<D>(c.kernel, hydro_particle<D>(c, a), false, c.geometric_force);
   Vec<D> dvdt = Vec<D>::zero();
   Real dudt = 0, drhodt = 0, mu_max = 0;
   WallContact<D> wall;
@@ -573,7 +574,7 @@ RUBBLE_HD_INLINE void hydro_rates_particle(const RhsContext<D>& c, std::uint32_t
     if (norm2(dx) >= h_max * h_max) return;
     HydroParticle<D> pb = hydro_particle<D>(c, b);
     pb.v = seen_velocity<D>(s, a, b);
-    const HydroPairRates<D> r = hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true), dx, !c.summation);
+    const HydroPairRates<D> r = hydro_pair<D>(pa, hydro_side<D>(c.kernel, pb, true, c.geometric_force), dx, !c.summation);
     dvdt += wall_filtered_force<D>(s, a, b, r.dvdt, wall);
     dudt += r.dudt;
     drhodt += r.drhodt;

@@ -48,6 +48,7 @@ struct RunPhysics {
   // (simulation.energy_step_tolerance; its default courant^2; 0: off)
   double energy_step_tolerance = 0;
   Real density_step_fraction = 0;  // continuity density: simulation.density_step_fraction (0: no limit)
+  bool geometric_force = false;     // simulation.pressure_force = "geometric" (physics/hydro.hpp)
   Real body_force[3] = {0, 0, 0};  // simulation.gravity
   GravityConfig gravity;  // self-gravity ([gravity]; mode Off: none)
 };

@@ -523,6 +523,7 @@ class StepSequence {
     c.xsph_epsilon = ph_.xsph_epsilon;
     c.courant = ph_.courant;
     c.density_step_fraction = ph_.density_step_fraction;
+    c.geometric_force = ph_.geometric_force;
     c.force_factor = ph_.force_factor;
     c.h_tolerance = ph_.h_tolerance;
     c.body_force = g_;

@@ -16,6 +16,24 @@
 // particles. The pair force is antisymmetric in (a,b), so linear
 // momentum is conserved to round-off, and du/dt is the time derivative of
 // the thermal energy consistent with the work done by the pressure force.
+//
+// The geometric form (simulation.pressure_force = "geometric"; continuity
+// density only): the pressure enters as (p_a + p_b)/(rho_a rho_b) and the
+// density and energy equations weigh the neighbours by their volume m_b/rho_b,
+//
+//   dv_a/dt  = - sum_b m_b [ (p_a + p_b)/(rho_a rho_b) + Pi_ab ] gbar
+//   du_a/dt  =   p_a/rho_a sum_b (m_b/rho_b) v_ab . gbar + 1/2 sum_b m_b Pi_ab v_ab . gbar
+//   drho_a/dt =  rho_a sum_b (m_b/rho_b) v_ab . gbar
+//
+// (the "geometric density average force" of Wadsley, Keller & Quinn 2017,
+// MNRAS 471:2357, compared at planetary material boundaries by Ruiz-Bonilla
+// et al. 2022, MNRAS 512:4660; the volume-weighted continuity equation of
+// Ott & Schnetter 2003 for multiphase flow). Where rho_a = rho_b it is the
+// standard form; across a density jump under uniform pressure the standard
+// form's sum_b m_b/rho_b^2 g does not vanish and pushes the light side away,
+// while sum_b (m_b/rho_b) g ~ grad 1 = 0 does. Still antisymmetric (momentum
+// to round-off), and du/dt is again p/rho^2 times the drho/dt of the same
+// sum, so the pressure work is booked exactly as before.
 #include <cmath>
 
 #include "rubble/core/hd.hpp"
@@ -64,13 +82,16 @@ struct HydroSide {
   KernelAt<D> K;
   Real f;          // pressure_factor(p, omega, rho)
   Real inv_omega;  // 1/Omega, read only on a's side (0 on a neighbour's)
+  bool geometric;  // the geometric pressure force (both sides of a pair alike)
 };
 
 // `neighbour`: the side of b, whose 1/Omega no pair term reads.
+// `geometric`: the geometric pressure force (continuity density; above).
 template <int D>
-RUBBLE_HD_INLINE HydroSide<D> hydro_side(KernelType kernel, const HydroParticle<D>& q, bool neighbour = false) {
+RUBBLE_HD_INLINE HydroSide<D> hydro_side(KernelType kernel, const HydroParticle<D>& q, bool neighbour = false,
+                                         bool geometric = false) {
   return HydroSide<D>{q, kernel_at<D>(kernel, q.h), pressure_factor(q.p, q.omega, q.rho),
-                      neighbour ? Real(0) : Real(1) / q.omega};
+                      neighbour ? Real(0) : Real(1) / q.omega, geometric};
 }
 
 // What a pair's two sides share: the kernel gradients, the velocity
@@ -130,9 +151,16 @@ RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair_rates_a(const HydroPairTerms<D>& t
   HydroPairRates<D> out{Vec<D>::zero(), Real(0), Real(0), Real(0)};
   if (!t.active) return out;
   const Real dv_ga = dot(t.dv, t.g_a);
-  out.dvdt = sb.q.m * (pressure_acceleration<D>(sa.f, sb.f, t.g_a, t.g_b) - t.pi_ab * t.gbar);
-  out.dudt = sb.q.m * (sa.f * dv_ga + Real(0.5) * t.pi_ab * dot(t.dv, t.gbar));
-  out.drhodt = sb.q.m * dv_ga * sa.inv_omega;
+  if (sa.geometric) {  // continuity density: g_a = g_b = gbar, Omega = 1
+    const Real inv_rho_ab = Real(1) / (sa.q.rho * sb.q.rho);
+    out.dvdt = -sb.q.m * ((sa.q.p + sb.q.p) * inv_rho_ab + t.pi_ab) * t.gbar;
+    out.dudt = sb.q.m * (sa.q.p * inv_rho_ab * dv_ga + Real(0.5) * t.pi_ab * dot(t.dv, t.gbar));
+    out.drhodt = sa.q.rho * (sb.q.m / sb.q.rho) * dv_ga;
+  } else {
+    out.dvdt = sb.q.m * (pressure_acceleration<D>(sa.f, sb.f, t.g_a, t.g_b) - t.pi_ab * t.gbar);
+    out.dudt = sb.q.m * (sa.f * dv_ga + Real(0.5) * t.pi_ab * dot(t.dv, t.gbar));
+    out.drhodt = sb.q.m * dv_ga * sa.inv_omega;
+  }
   out.mu = -t.mu;
   if (t.alpha_u > Real(0))
     out.dudt += sb.q.m * conductivity_dudt(t.alpha_u, t.vsig_u, sa.q.u, sb.q.u, t.rhobar, t.F_ab);
@@ -175,8 +203,9 @@ RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(const HydroSide<D>& sa, const Hydr
 template <int D>
 RUBBLE_HD_INLINE HydroPairRates<D> hydro_pair(KernelType kernel, const HydroParticle<D>& a,
                                               const HydroParticle<D>& b, const Vec<D>& dx,
-                                              bool symmetric = false) {
-  return hydro_pair<D>(hydro_side<D>(kernel, a), hydro_side<D>(kernel, b, true), dx, symmetric);
+                                              bool symmetric = false, bool geometric = false) {
+  return hydro_pair<D>(hydro_side<D>(kernel, a, false, geometric), hydro_side<D>(kernel, b, true, geometric), dx,
+                       symmetric);
 }
 
 }  // namespace rubble

@@ -27,6 +27,10 @@ enum class Integrator : int { RK2Adaptive = 0, Leapfrog = 1 };
 enum class StressUpdate : int { Predicted = 0, Staggered = 1 };
 
 enum class DampingFrame : int { Global = 0, Body = 1 };
+// The hydrodynamic pressure force (physics/hydro.hpp): standard p/rho^2
+// terms, or the geometric (p_a + p_b)/(rho_a rho_b) with volume-weighted
+// continuity (continuity density, fluids only).
+enum class PressureForce : int { Standard = 0, Geometric = 1 };
 
 struct SimulationConfig {
   int dimension = 0;                        // 1, 2 or 3 (required)
@@ -60,6 +64,7 @@ struct SimulationConfig {
   // With [collision] it is "body" and the colliding bodies are held in place
   // while damped, then launched onto their orbit at damping_end.
   DampingFrame damping_frame = DampingFrame::Global;
+  PressureForce pressure_force = PressureForce::Standard;
   // Solids: kernel-gradient correction of the velocity gradient
   // (Randles & Libersky 1996); off by default.
   bool kernel_correction = false;
