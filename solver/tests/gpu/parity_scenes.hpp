@@ -9,9 +9,10 @@
 // solids with artificial stress, XSPH and a clamp of evolving boundary
 // particles (the oscillating plate, with either stress update), and 3-D self-gravity by direct
 // summation and by the octree, with damping (a small polytrope), and the 2-D
-// granular column collapse with no-slip and with Coulomb walls - between
-// them every driver. Each runs `steps` steps of exactly dt: dt is below the
+// granular column collapse with no-slip and with Coulomb walls, and two
+// layered embryos held, relaxed and launched - between them every driver. Each runs `steps` steps of exactly dt: dt is below the
 // Courant limit and the output interval (which bounds every step) is dt.
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,6 +99,18 @@ inline Scene granular_column_coulomb(int steps) {
   return load_scene_file(src("validation/granular_column_collapse/granular_column_collapse.toml"), sets);
 }
 
+// Two layered embryos (examples/embryo_collision/): Tillotson layers on
+// shells, the geometric pressure force, Barnes-Hut (one walk per particle,
+// as above), the damping of each body in its own frame while the collision
+// holds them, and their launch at damping_end (half-way through the run).
+// dt = 2 s is below the example's first steps (~5 s).
+inline Scene embryo_collision(int steps) {
+  auto sets = steps_of(2.0, steps);
+  sets.insert(sets.end(), {"gravity.group_size=1", "simulation.damping_end=" + std::to_string(2.0 * std::max(1, steps / 2)),
+                           "bodies.0.particles=900", "bodies.1.particles=100"});
+  return load_scene_file(src("examples/embryo_collision/embryo_collision.toml"), sets);
+}
+
 struct ParityScene {
   const char* name;  // a test-name-safe identifier
   Scene (*make)(int steps);
@@ -112,7 +125,8 @@ inline const std::vector<ParityScene>& scenes() {
       {"PolytropeDirect", polytrope},
       {"PolytropeBarnesHut", polytrope_bh},
       {"GranularColumn", granular_column},
-      {"GranularColumnCoulomb", granular_column_coulomb}};
+      {"GranularColumnCoulomb", granular_column_coulomb},
+      {"EmbryoCollision", embryo_collision}};
   return s;
 }
 
