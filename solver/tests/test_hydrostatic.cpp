@@ -8,7 +8,10 @@
 // Murnaghan EOS so stiff (K0 = 1e22 Pa) that rho stays rho0 to ~1e-12; and a
 // Tillotson iron-basalt-ice body checked for what the equations demand:
 // pressure falling outwards, each layer at or above its reference density,
-// u >= 0 on each layer's adiabat, the layer masses summing to the total.
+// u >= 0 on each layer's adiabat, the layer masses summing to the total;
+// and a polytrope: a Murnaghan body with n = 2 has p + K0/2 = (K0/(2 rho0^2))
+// rho^2, so its dp/dr is that of an N = 1 polytrope, rho = rho_c sin(xi)/xi,
+// xi = r/alpha, alpha^2 = K0/(4 pi G rho0^2), truncated where rho = rho0.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -113,6 +116,26 @@ TEST(Hydrostatic, LayeredTillotsonBodyIsCompressedInwardsOnItsAdiabats) {
   EXPECT_LE(pr.centre_pressure, 1.2 * rigid.centre_pressure);
   EXPECT_GE(pr.mass, rigid.mass);
   EXPECT_LE(pr.mass, 1.1 * rigid.mass);
+}
+
+TEST(Hydrostatic, MurnaghanBodyWithNEqualTwoIsATruncatedPolytrope) {
+  const double rho0 = 3000, K0 = 1e10, x = 1.2;  // x = R / alpha: rho_c / rho0 = x / sin x = 1.29
+  const double alpha = std::sqrt(K0 / (4 * kPi * G * rho0 * rho0)), R = x * alpha;
+  EosParams e;
+  e.kind = EosKind::Murnaghan;
+  e.murnaghan = {Real(rho0), Real(K0), Real(2)};
+  const HydrostaticProfile pr = hydrostatic_profile({{e, R}}, G);
+  const double rho_c = rho0 * x / std::sin(x), Kp = K0 / (2 * rho0 * rho0);
+  const double p_c = Kp * rho_c * rho_c - K0 / 2;
+  const double M = 4 * kPi * rho_c * alpha * alpha * alpha * (std::sin(x) - x * std::cos(x));
+  EXPECT_NEAR(pr.mass / M, 1.0, 1e-6);
+  EXPECT_NEAR(pr.centre_pressure / p_c, 1.0, 1e-6);
+  for (std::size_t i = 0; i < pr.r.size(); i += 97) {
+    const double xi = pr.r[i] / alpha;
+    const double rho = xi > 0 ? rho_c * std::sin(xi) / xi : rho_c;
+    EXPECT_NEAR(pr.rho[i] / rho, 1.0, 1e-6) << "r = " << pr.r[i];
+    EXPECT_NEAR(pr.p[i], Kp * rho * rho - K0 / 2, 1e-6 * p_c) << "r = " << pr.r[i];
+  }
 }
 
 TEST(Hydrostatic, BadLayersAreRefused) {
