@@ -1,7 +1,7 @@
 #pragma once
 // Reading a run's conserved.csv (solver/include/rubble/io/conserved_log.hpp
-// writes it) back in a rung: the time, energy and momentum columns, found by
-// name.
+// writes it) back in a rung: the time, energy, momentum and angular
+// momentum columns, found by name.
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -14,6 +14,7 @@ namespace rubble::verification {
 struct ConservedRow {
   double t, kinetic, internal, gravitational, total;
   double momentum[3];  // the components the run's dimension has; 0 for the others
+  double angular_momentum[3];  // likewise (2-D: z only; 1-D: none)
 };
 
 inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
@@ -34,12 +35,13 @@ inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
   };
   const std::size_t ct = col("time"), ck = col("kinetic"), ci = col("internal"), cg = col("gravitational"),
                     ce = col("total");
-  const char* momentum_names[3] = {"momentum_x", "momentum_y", "momentum_z"};
-  std::size_t cp[3];
-  for (int k = 0; k < 3; ++k) {
-    const auto it = std::find(cols.begin(), cols.end(), momentum_names[k]);
-    cp[k] = it == cols.end() ? cols.size() : std::size_t(it - cols.begin());  // cols.size(): not written
-  }
+  auto optional = [&](const char* name) {  // cols.size(): not written
+    const auto it = std::find(cols.begin(), cols.end(), name);
+    return it == cols.end() ? cols.size() : std::size_t(it - cols.begin());
+  };
+  const std::size_t cp[3] = {optional("momentum_x"), optional("momentum_y"), optional("momentum_z")};
+  const std::size_t cl[3] = {optional("angular_momentum_x"), optional("angular_momentum_y"),
+                             optional("angular_momentum_z")};
   std::vector<ConservedRow> rows;
   while (std::getline(f, line)) {
     std::vector<double> v;
@@ -48,9 +50,9 @@ inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
     while (std::getline(ss, c, ',')) v.push_back(std::stod(c));
     if (v.size() != cols.size()) throw std::runtime_error(path + ": a row with " + std::to_string(v.size()) +
                                                           " values under " + std::to_string(cols.size()) + " columns");
-    rows.push_back({v[ct], v[ck], v[ci], v[cg], v[ce],
-                    {cp[0] < v.size() ? v[cp[0]] : 0.0, cp[1] < v.size() ? v[cp[1]] : 0.0,
-                     cp[2] < v.size() ? v[cp[2]] : 0.0}});
+    auto at = [&](std::size_t c) { return c < v.size() ? v[c] : 0.0; };
+    rows.push_back({v[ct], v[ck], v[ci], v[cg], v[ce], {at(cp[0]), at(cp[1]), at(cp[2])},
+                    {at(cl[0]), at(cl[1]), at(cl[2])}});
   }
   return rows;
 }
