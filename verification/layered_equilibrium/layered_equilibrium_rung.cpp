@@ -199,12 +199,8 @@ int run(const Args& args) {
     checks.push_back({"largest particle speed over the escape speed", v_max, 0.01, "<=",
                       "issue #52 item 2: particle speeds below 1 % of the escape speed"});
   }
-  std::vector<Json> cj;
-  for (const auto& c : checks) {
-    cj.push_back(c.json());
-    std::printf("  [%s] %s = %.4g (%s %.4g; %s)\n", c.passed() ? "PASS" : "FAIL", c.name.c_str(), c.value,
-                c.op.c_str(), c.threshold, c.source.c_str());
-  }
+  bool all_passed = true;
+  const Json judged = rubble::verification::judge_checks(checks, all_passed);
 
   // the last judged snapshot's density against the profile (the plot)
   const Judged& last = all.back();
@@ -242,7 +238,7 @@ int run(const Args& args) {
                                        {"v_99", v_99s}})},
               {"steps", static_cast<long long>(fs.steps)},
               {"wall_seconds", fs.wall_seconds},
-              {"checks", Json::array(cj)},
+              {"checks", judged},
               {"units", Json::object({{"x", "R"}, {"rho", "kg/m^3"}})},
               {"profile", Json::object({{"x_label", "r / R"},
                                         {"x", px},
