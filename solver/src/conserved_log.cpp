@@ -25,6 +25,7 @@ std::vector<int> angular_components(int dim) {
 }  // namespace
 
 std::string ConservedLog::header(int dimension) {
+  if (dimension < 1 || dimension > 3) throw std::invalid_argument("ConservedLog: dimension must be 1, 2 or 3");
   std::string h = "time,step,dt,mass";
   for (int k = 0; k < dimension; ++k) h += std::string(",momentum_") + kAxis[k];
   for (int k : angular_components(dimension)) h += std::string(",angular_momentum_") + kAxis[k];
@@ -32,25 +33,22 @@ std::string ConservedLog::header(int dimension) {
   return h;
 }
 
-ConservedLog::ConservedLog(const std::string& path, int dimension)
-    : path_(path), dim_(dimension), file_(nullptr, &std::fclose) {
-  if (dim_ < 1 || dim_ > 3) throw std::invalid_argument("ConservedLog: dimension must be 1, 2 or 3");
+CsvLog::CsvLog(const std::string& path, const std::string& header)
+    : path_(path), file_(nullptr, &std::fclose) {
   file_.reset(std::fopen(path_.c_str(), "w"));
-  if (!file_) throw std::runtime_error("conserved log '" + path_ + "': cannot create: " + std::strerror(errno));
-  if (std::fprintf(file_.get(), "%s\n", header(dim_).c_str()) < 0 || std::fflush(file_.get()) != 0)
-    throw std::runtime_error("conserved log '" + path_ + "': writing the header failed: " + std::strerror(errno));
+  if (!file_) throw std::runtime_error("'" + path_ + "': cannot create: " + std::strerror(errno));
+  if (std::fprintf(file_.get(), "%s\n", header.c_str()) < 0 || std::fflush(file_.get()) != 0)
+    throw std::runtime_error("'" + path_ + "': writing the header failed: " + std::strerror(errno));
 }
 
-ConservedLog::ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step)
-    : path_(path), dim_(dimension), file_(nullptr, &std::fclose) {
-  if (dim_ < 1 || dim_ > 3) throw std::invalid_argument("ConservedLog: dimension must be 1, 2 or 3");
-  std::string kept = header(dim_) + "\n";
+CsvLog::CsvLog(const std::string& path, const std::string& header, const std::string& history, std::int64_t last_step)
+    : path_(path), file_(nullptr, &std::fclose) {
+  std::string kept = header + "\n";
   if (std::ifstream in(history); in) {
     std::string line;
     std::getline(in, line);
-    if (line != header(dim_))
-      throw std::runtime_error("conserved log '" + history + "': its header is not that of a " + std::to_string(dim_) +
-                               "-D run; cannot continue it");
+    if (line != header)
+      throw std::runtime_error("'" + history + "': its header is not this run's (" + header + "); cannot continue it");
     while (std::getline(in, line)) {
       const auto a = line.find(','), b = a == std::string::npos ? a : line.find(',', a + 1);
       if (b == std::string::npos) continue;  // a line cut short by the interruption
@@ -67,41 +65,53 @@ ConservedLog::ConservedLog(const std::string& path, int dimension, const std::st
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << kept;
-    if (!out.flush())
-      throw std::runtime_error("conserved log '" + tmp + "': cannot write: " + std::strerror(errno));
+    if (!out.flush()) throw std::runtime_error("'" + tmp + "': cannot write: " + std::strerror(errno));
   }
   if (std::rename(tmp.c_str(), path_.c_str()) != 0) {
     std::remove(tmp.c_str());
-    throw std::runtime_error("conserved log '" + path_ + "': rename failed: " + std::strerror(errno));
+    throw std::runtime_error("'" + path_ + "': rename failed: " + std::strerror(errno));
   }
   file_.reset(std::fopen(path_.c_str(), "a"));
-  if (!file_) throw std::runtime_error("conserved log '" + path_ + "': cannot open to append: " + std::strerror(errno));
+  if (!file_) throw std::runtime_error("'" + path_ + "': cannot open to append: " + std::strerror(errno));
 }
 
-void ConservedLog::append(const ConservedRecord& r) {
-  std::string line;
+void CsvLog::append_line(const std::string& line) {
+  if (std::fputs((line + "\n").c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
+    throw std::runtime_error("'" + path_ + "': write failed: " + std::strerror(errno));
+}
+
+void CsvLine::put(double v) {
   char buf[40];
-  auto put = [&](double v) {
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    if (!line.empty()) line += ',';
-    line += buf;
-  };
-  put(r.time);
-  line += ',' + std::to_string(r.step);
-  put(r.dt);
-  put(r.mass);
-  for (int k = 0; k < dim_; ++k) put(r.momentum[k]);
-  for (int k : angular_components(dim_)) put(r.angular_momentum[k]);
-  put(r.kinetic);
-  put(r.internal);
-  put(r.gravitational);
-  put(r.total);
-  put(r.wall_work);
-  put(r.floor_energy);
-  put(r.booked_total);
-  line += '\n';
-  if (std::fputs(line.c_str(), file_.get()) < 0 || std::fflush(file_.get()) != 0)
-    throw std::runtime_error("conserved log '" + path_ + "': write failed: " + std::strerror(errno));
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  if (!text.empty()) text += ',';
+  text += buf;
+}
+void CsvLine::put(std::int64_t v) {
+  if (!text.empty()) text += ',';
+  text += std::to_string(v);
+}
+
+ConservedLog::ConservedLog(const std::string& path, int dimension) : CsvLog(path, header(dimension)), dim_(dimension) {}
+
+ConservedLog::ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step)
+    : CsvLog(path, header(dimension), history, last_step), dim_(dimension) {}
+
+void ConservedLog::append(const ConservedRecord& r) {
+  CsvLine line;
+  line.put(r.time);
+  line.put(r.step);
+  line.put(r.dt);
+  line.put(r.mass);
+  for (int k = 0; k < dim_; ++k) line.put(r.momentum[k]);
+  for (int k : angular_components(dim_)) line.put(r.angular_momentum[k]);
+  line.put(r.kinetic);
+  line.put(r.internal);
+  line.put(r.gravitational);
+  line.put(r.total);
+  line.put(r.wall_work);
+  line.put(r.floor_energy);
+  line.put(r.booked_total);
+  append_line(line.text);
 }
 
 template <int D>

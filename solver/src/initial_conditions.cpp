@@ -12,6 +12,7 @@
 
 #include "rubble/core/error.hpp"
 #include "rubble/drivers/run_physics.hpp"
+#include "rubble/physics/rigid_body.hpp"
 #include "rubble/neighbors/cell_list.hpp"
 #include "rubble/neighbors/spatial_order.hpp"
 #include "rubble/physics/kernels.hpp"
@@ -233,6 +234,7 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
   std::vector<std::int64_t> first{0};
   for (const auto& points : body_points) first.push_back(first.back() + std::int64_t(points.size()));
   std::size_t next = 0;
+  std::int32_t tool_index = 0;  // rigid tools are numbered in body order (RunPhysics::tools)
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodyConfig& b = scene.bodies[i];
     const std::string key = "bodies[" + std::to_string(i) + "]";
@@ -325,11 +327,44 @@ std::vector<std::int64_t> generate_bodies(const Scene& scene, double hfact, cons
                             : b.boundary_state == BoundaryState::Evolving     ? kBoundaryEvolving
                             : b.boundary_state == BoundaryState::Extrapolated ? kBoundaryExtrapolated
                                                                               : kBoundaryFrozen;
+      if (b.rigid_tool()) {
+        // a rigid tool: its offset from the rotation centre, and the velocity
+        // of its rigid motion (physics/rigid_body.hpp)
+        Vec<D> r0, V;
+        for (int k = 0; k < D; ++k) {
+          r0[k] = Real(double(x[k]) - b.rotation_center[k]);
+          V[k] = Real(b.velocity[k]);
+        }
+        const Vec<3> n{{Real(b.rotation_axis[0]), Real(b.rotation_axis[1]), Real(b.rotation_axis[2])}};
+        ps.tool[next] = tool_index;
+        ps.tool_offset[next] = r0;
+        ps.v[next] = V + turning_velocity<D>(n, Real(b.angular_velocity), r0);
+      }
       for (int k = 0; k < D; ++k)
         if (!std::isfinite(ps.x[next][k]) || !std::isfinite(ps.v[next][k]))
           throw InputError(scene.file, key, "initial position or velocity is not finite");
       ++next;
     }
+    if (b.rigid_tool() && b.boundary == BoundaryKind::Driven) {
+      // a driven tool turns about its centre of mass (physics/rigid_body.hpp):
+      // its offsets from there, its velocity V + omega n x r0 about it
+      const std::size_t lo = std::size_t(first[i]), hi = next;
+      double M = 0, mx[3] = {0, 0, 0};
+      for (std::size_t j = lo; j < hi; ++j) {
+        M += double(ps.m[j]);
+        for (int k = 0; k < D; ++k) mx[k] += double(ps.m[j]) * double(ps.x[j][k]);
+      }
+      const Vec<3> n{{Real(b.rotation_axis[0]), Real(b.rotation_axis[1]), Real(b.rotation_axis[2])}};
+      for (std::size_t j = lo; j < hi; ++j) {
+        Vec<D> V;
+        for (int k = 0; k < D; ++k) {
+          ps.tool_offset[j][k] = Real(double(ps.x[j][k]) - mx[k] / M);
+          V[k] = Real(b.velocity[k]);
+        }
+        ps.v[j] = V + turning_velocity<D>(n, Real(b.angular_velocity), ps.tool_offset[j]);
+      }
+    }
+    if (b.rigid_tool()) ++tool_index;
   }
   // [collision]: the bodies moved onto their orbit (before the wall
   // anchors, which start where the particles are)

@@ -58,6 +58,7 @@ struct LoopStart {
   bool resumed = false;
   std::filesystem::path from_dir;  // the restart snapshot's directory
   EnergyBooks books;               // the energy bookkeeping so far
+  std::vector<double> tool_state;  // the rigid tools' states (RestartState::tool_state)
   CollisionSetup collision;        // [collision]: held = launched at damping_end
 };
 
@@ -104,8 +105,76 @@ void launch_collision(Stepper& sys, const Scene& scene, const CollisionSetup& se
 struct LoopState {
   double dt_proposal = 0;
   double next_output = 0;
-  EnergyBooks books;  // the stepper's, as of the snapshot
+  EnergyBooks books;               // the stepper's, as of the snapshot
+  std::vector<double> tool_state;  // the rigid tools', as of the snapshot
+  template <class Stepper>
+  void take(Stepper& sys) {
+    books = sys.energy_books();
+    tool_state = sys.tool_state();
+  }
 };
+
+// boundary_forces.csv (docs/user-guide.md, "Forces on walls and tools"):
+// for each boundary body, the force and torque that the other particles
+// exert on it (StepSequence::held_force, from wall_force), the torque about
+// its reference point: a rigid tool's rotation centre (a driven tool's
+// centre of mass), else the centroid of its particles; and that point's
+// motion (a tool's angle and angular velocity, 0 for other bodies).
+std::string boundary_forces_header(int dim) {
+  const char* axis[3] = {"x", "y", "z"};
+  std::string h = "time,step,body";
+  for (int k = 0; k < dim; ++k) h += std::string(",force_") + axis[k];
+  if (dim == 2) h += ",torque_z";
+  if (dim == 3) h += ",torque_x,torque_y,torque_z";
+  for (int k = 0; k < dim; ++k) h += std::string(",point_") + axis[k];
+  h += ",angle";
+  for (int k = 0; k < dim; ++k) h += std::string(",velocity_") + axis[k];
+  h += ",angular_velocity";
+  return h;
+}
+
+template <int D, class Stepper>
+std::vector<std::string> boundary_force_lines(const Scene& scene, Stepper& sys, const std::vector<std::int64_t>& first,
+                                              double t, std::int64_t step) {
+  std::vector<std::string> lines;
+  const std::vector<double> tools = sys.tool_state();
+  std::size_t tool = 0;
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    const BodyConfig& body = scene.bodies[b];
+    if (body.boundary == BoundaryKind::None) continue;
+    const auto lo = std::int32_t(first[b]), hi = std::int32_t(first[b + 1]);
+    Vec<D> point, V;
+    double angle = 0, omega = 0;
+    if (body.rigid_tool()) {
+      const double* y = tools.data() + tool++ * (2 * D + 2);
+      for (int k = 0; k < D; ++k) {
+        point[k] = Real(y[k]);
+        V[k] = Real(y[D + 1 + k]);
+      }
+      angle = y[D];
+      omega = y[2 * D + 1];
+    } else {
+      const BodySums<D> s = sys.body_sums(lo, hi);
+      point = s.mx * Real(1 / s.m);
+      V = s.mv * Real(1 / s.m);
+    }
+    const ForceSums<D> f = sys.held_force(lo, hi, point);
+    CsvLine line;
+    line.put(t);
+    line.put(step);
+    line.put(std::int64_t(b));
+    for (int k = 0; k < D; ++k) line.put(f.F[k]);
+    if (D == 2) line.put(f.T[2]);
+    if (D == 3)
+      for (int k = 0; k < 3; ++k) line.put(f.T[k]);
+    for (int k = 0; k < D; ++k) line.put(double(point[k]));
+    line.put(angle);
+    for (int k = 0; k < D; ++k) line.put(double(V[k]));
+    line.put(omega);
+    lines.push_back(line.text);
+  }
+  return lines;
+}
 
 // One run at a time per output directory: an exclusive flock() on
 // DIR/.rubble.lock, held until the run ends (the OS releases it if the
@@ -179,8 +248,12 @@ class OutputWriter {
     }
     guarded([&] { xdmf_ = std::make_unique<XdmfWriter>((dir_ / (scene_.output.name + ".xdmf")).string(), D); });
     const std::string csv = (dir_ / "conserved.csv").string();
+    const std::string forces = (dir_ / "boundary_forces.csv").string();
+    const bool walls = std::any_of(scene_.bodies.begin(), scene_.bodies.end(),
+                                   [](const BodyConfig& b) { return b.boundary != BoundaryKind::None; });
     if (!start.resumed) {
       guarded([&] { log_ = std::make_unique<ConservedLog>(csv, D); });
+      if (walls) guarded([&] { forces_ = std::make_unique<CsvLog>(forces, boundary_forces_header(D)); });
       return;
     }
     // Resumed: into the restart snapshot's own directory, the run's
@@ -200,6 +273,11 @@ class OutputWriter {
     guarded([&] {
       log_ = std::make_unique<ConservedLog>(csv, D, (start.from_dir / "conserved.csv").string(), start.step);
     });
+    if (walls)
+      guarded([&] {
+        forces_ = std::make_unique<CsvLog>(forces, boundary_forces_header(D),
+                                           (start.from_dir / "boundary_forces.csv").string(), start.step);
+      });
   }
 
  public:
@@ -209,6 +287,11 @@ class OutputWriter {
   bool writes_snapshots() const { return enabled_ && scene_.output.snapshots; }
   void log(const ConservedRecord& r) {
     if (enabled_) guarded([&] { log_->append(r); });
+  }
+  // Whether boundary_forces.csv is written (a run with boundary bodies).
+  bool logs_forces() const { return enabled_ && forces_ != nullptr; }
+  void log_forces(const std::vector<std::string>& lines) {
+    if (logs_forces()) guarded([&] { for (const std::string& l : lines) forces_->append_line(l); });
   }
 
   // The next regular snapshot; `loop` is the state after it (the next
@@ -254,6 +337,7 @@ class OutputWriter {
     r.libraries = scene_.libraries;
     r.body_first_id = body_first_;
     r.books = loop.books;
+    r.tool_state = loop.tool_state;
     return r;
   }
 
@@ -298,6 +382,7 @@ class OutputWriter {
   std::vector<std::int64_t> body_first_;
   double slowest_write_ = 0;
   std::unique_ptr<XdmfWriter> xdmf_;
+  std::unique_ptr<CsvLog> forces_;  // boundary_forces.csv (boundary bodies only)
   std::unique_ptr<ConservedLog> log_;
 };
 
@@ -438,10 +523,13 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
   if (!start.resumed) {
     loop.next_output = std::min(out_interval, t_end);
     loop.dt_proposal = sim.dt_initial > 0 ? sim.dt_initial : sys.dt_limit();
+    loop.take(sys);
     if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
     if (out.enabled()) out.log(sys.conserved(t, step, 0));
+    if (out.logs_forces()) out.log_forces(boundary_force_lines<D>(scene, sys, body_first, t, step));
   } else {
     sys.set_energy_books(start.books);
+    sys.set_tool_state(start.tool_state);
     loop.dt_proposal = start.dt_proposal;
     // an end_time extended on resuming moves the next output past t
     loop.next_output = std::min(start.next_output, t_end);
@@ -594,11 +682,13 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       const double ci = scene.output.conserved_interval;
       t0 = Clock::now();
       if (out.enabled() && (ci <= 0 || std::floor(t / ci) != std::floor(t_before / ci) || output_time ||
-                            t >= t_end * (1 - 1e-12)))
+                            t >= t_end * (1 - 1e-12))) {
         out.log(sys.conserved(t, step, dt));
+        if (out.logs_forces()) out.log_forces(boundary_force_lines<D>(scene, sys, body_first, t, step));
+      }
       if (output_time) {
         loop.next_output = std::min(loop.next_output + out_interval, t_end);
-        loop.books = sys.energy_books();
+        loop.take(sys);
         if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
       }
       t_output += since(t0);
@@ -610,7 +700,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
       if (g_stop_signal != 0) stopped = g_stop_signal == SIGINT ? "SIGINT" : g_stop_signal == SIGTERM ? "SIGTERM" : "a signal";
       else if (opt.max_wall_seconds > 0 && now + 2 * slowest_step + out.slowest_write() >= opt.max_wall_seconds)
         stopped = "the wall-time limit";
-      loop.books = sys.energy_books();
+      loop.take(sys);
       if (!stopped.empty()) {
         t0 = Clock::now();
         checkpoint = out.checkpoint(sys.host(), t, step, loop);
@@ -738,6 +828,7 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     start.next_snapshot = meta.restart.next_snapshot;
     start.resumed = true;
     start.books = meta.restart.books;
+    start.tool_state = meta.restart.tool_state;
     start.from_dir = std::filesystem::path(opt.restart_from).parent_path();
     if (start.from_dir.empty()) start.from_dir = ".";
     body_first = meta.restart.body_first_id;

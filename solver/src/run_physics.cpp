@@ -35,6 +35,7 @@ Features features_of_scene(const Scene& scene) {
     on.free_slip = on.free_slip || b.sliding_wall();
     on.wall_friction = on.wall_friction || b.wall_slip == WallSlip::Coulomb;
     on.wall_extrapolation = on.wall_extrapolation || (wall && b.boundary_state == BoundaryState::Extrapolated);
+    on.rigid_tools = on.rigid_tools || b.rigid_tool();
   }
   on.xsph = sim.xsph > 0;
   on.kernel_correction = on.solid && sim.kernel_correction;
@@ -131,6 +132,24 @@ RunPhysics run_physics(const Scene& scene) {
   r.energy_step_tolerance = sim.energy_step_tolerance >= 0 ? sim.energy_step_tolerance : sim.courant * sim.courant;
   for (int k = 0; k < 3; ++k) r.body_force[k] = Real(sim.gravity[k]);
   r.gravity = scene.gravity;
+  for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
+    const BodyConfig& b = scene.bodies[k];
+    if (!b.rigid_tool()) continue;
+    RigidToolSpec t;
+    t.body = int(k);
+    t.driven = b.boundary == BoundaryKind::Driven;
+    t.centre = b.rotation_center;
+    t.velocity = b.velocity;
+    t.axis = b.rotation_axis;
+    t.angular_velocity = b.angular_velocity;
+    t.applied_force = b.applied_force;
+    t.applied_torque = b.applied_torque;
+    t.free_axis = b.driven_axes;
+    t.free_rotation = b.driven_rotation;
+    t.mass = b.tool_mass;
+    t.inertia = b.tool_inertia;
+    r.tools.push_back(t);
+  }
   return r;
 }
 

@@ -28,6 +28,7 @@
 #include "rubble/drivers/run_physics.hpp"
 #include "rubble/scene/layered_body.hpp"
 #include "rubble/scene/scene_parser.hpp"
+#include "rubble/physics/rigid_body.hpp"
 
 namespace rubble {
 namespace {
@@ -382,6 +383,7 @@ class SceneReader {
   std::string resolve_library(const std::string& spec, const std::string& key, const toml::node* where) const;
   void record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file);
   BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
+  void read_rigid_tool(const std::string& p, const toml::table& t, BodyConfig& b) const;
   void check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m, double rho,
                                 double pressure) const;
   void read_domain(const toml::table& t, DomainConfig& d);
@@ -1079,6 +1081,80 @@ void SceneReader::check_pressure_reachable(const std::string& p, const toml::tab
        t.get("pressure"));
 }
 
+// A rigid tool's keys (physics/rigid_body.hpp; docs/scene.md): after
+// `boundary` and the shape, so the default rotation centre is known.
+void SceneReader::read_rigid_tool(const std::string& p, const toml::table& t, BodyConfig& b) const {
+  const bool moving = b.boundary == BoundaryKind::Moving, driven = b.boundary == BoundaryKind::Driven;
+  if (auto w = number(t, "angular_velocity", p)) {
+    if (!(moving || driven))
+      fail(p + ".angular_velocity", "only a boundary = \"moving\" or \"driven\" body turns as a rigid tool",
+           t.get("angular_velocity"));
+    if (dim_ == 1) fail(p + ".angular_velocity", "nothing turns in 1-D", t.get("angular_velocity"));
+    b.angular_velocity = *w;
+  }
+  if (moving && b.angular_velocity != 0 && t.contains("velocity_gradient"))
+    fail(p + ".velocity_gradient",
+         "a turning tool moves rigidly (velocity and angular_velocity); velocity_gradient is for grips that stretch",
+         t.get("velocity_gradient"));
+  if (driven && t.contains("velocity_gradient"))
+    fail(p + ".velocity_gradient", "a driven tool moves rigidly; give its initial velocity and angular_velocity",
+         t.get("velocity_gradient"));
+  const bool tool = b.rigid_tool();
+  for (const char* key : {"rotation_axis", "rotation_center"})
+    if (t.contains(key) && !tool)
+      fail(p + "." + key,
+           "only a rigid tool turns (boundary = \"moving\" with a non-zero angular_velocity, or \"driven\")",
+           t.get(key));
+  for (const char* key : {"applied_force", "applied_torque", "driven_axes", "driven_rotation", "tool_mass", "tool_inertia"})
+    if (t.contains(key) && !driven)
+      fail(p + "." + key, "only a driven tool (boundary = \"driven\") responds to forces", t.get(key));
+  if (!tool) return;
+  if (dim_ != 3 && t.contains("rotation_axis"))
+    fail(p + ".rotation_axis", "a 2-D tool turns about z; rotation_axis is for 3-D scenes", t.get("rotation_axis"));
+  if (auto n = vector(t, "rotation_axis", p)) {
+    const double len = std::sqrt((*n)[0] * (*n)[0] + (*n)[1] * (*n)[1] + (*n)[2] * (*n)[2]);
+    if (!(len > 0)) fail(p + ".rotation_axis", "is the zero vector; give the axis' direction", t.get("rotation_axis"));
+    for (int a = 0; a < 3; ++a) b.rotation_axis[a] = (*n)[a] / len;
+  }
+  if (auto c = vector(t, "rotation_center", p)) {
+    if (driven)
+      fail(p + ".rotation_center", "a driven tool turns about its centre of mass; rotation_center is for boundary = \"moving\"",
+           t.get("rotation_center"));
+    b.rotation_center = *c;
+  } else {
+    for (int a = 0; a < 3; ++a) b.rotation_center[a] = b.shape == BodyShape::Box ? 0.5 * (b.min[a] + b.max[a]) : b.center[a];
+  }
+  if (!driven) return;
+  if (auto f = vector(t, "applied_force", p)) b.applied_force = *f;
+  if (auto q = number(t, "applied_torque", p)) {
+    if (dim_ == 1) fail(p + ".applied_torque", "nothing turns in 1-D", t.get("applied_torque"));
+    b.applied_torque = *q;
+  }
+  if (const toml::node* n = t.get("driven_axes")) {
+    const toml::array* arr = n->as_array();
+    if (!arr) fail(p + ".driven_axes", "expected an array of " + std::to_string(dim_) + " booleans, got " + type_name(*n), n);
+    check_length(*arr, p + ".driven_axes", n);
+    for (int a = 0; a < dim_; ++a) {
+      const auto* v = (*arr)[std::size_t(a)].as_boolean();
+      if (!v) fail(p + ".driven_axes", "entry " + std::to_string(a) + ": expected true or false", n);
+      b.driven_axes[a] = v->get();
+    }
+  }
+  if (auto r = boolean(t, "driven_rotation", p)) {
+    if (dim_ == 1 && *r) fail(p + ".driven_rotation", "nothing turns in 1-D", t.get("driven_rotation"));
+    b.driven_rotation = *r;
+  }
+  if (dim_ == 1) b.driven_rotation = false;
+  if (auto m = number(t, "tool_mass", p)) {
+    require(*m > 0, t, "tool_mass", p, *m, "> 0 (leave it out for the mass of the tool's particles)");
+    b.tool_mass = *m;
+  }
+  if (auto I = number(t, "tool_inertia", p)) {
+    require(*I > 0, t, "tool_inertia", p, *I, "> 0 (leave it out for the moment of inertia of the tool's particles)");
+    b.tool_inertia = *I;
+  }
+}
+
 BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
                                   const std::vector<MaterialConfig>& mats) {
   BodyConfig b;
@@ -1094,7 +1170,8 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   const bool round = b.shape != BodyShape::Box;
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
                                     "velocity", "velocity_gradient", "boundary", "boundary_state", "wall_slip", "wall_friction",
-                                    "wall_normal"};
+                                    "wall_normal", "angular_velocity", "rotation_axis", "rotation_center", "applied_force",
+                                    "applied_torque", "driven_axes", "driven_rotation", "tool_mass", "tool_inertia"};
   if (round) known.insert(known.end(), {"center", "radius"});
   else known.insert(known.end(), {"min", "max"});
   if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
@@ -1184,7 +1261,11 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
     }
   }
   b.boundary = choice(t, "boundary", p, BoundaryKind::None,
-                      {{"none", BoundaryKind::None}, {"fixed", BoundaryKind::Fixed}, {"moving", BoundaryKind::Moving}});
+                      {{"none", BoundaryKind::None},
+                       {"fixed", BoundaryKind::Fixed},
+                       {"moving", BoundaryKind::Moving},
+                       {"driven", BoundaryKind::Driven}});
+  read_rigid_tool(p, t, b);
   if (b.boundary == BoundaryKind::Fixed && t.contains("velocity_gradient"))
     fail(p + ".velocity_gradient",
          "a boundary = \"fixed\" body is at rest; use boundary = \"moving\" for particles that keep velocity + L x",
@@ -1196,7 +1277,7 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
              t.get("velocity"));
   if (t.contains("boundary_state")) {
     if (b.boundary == BoundaryKind::None)
-      fail(p + ".boundary_state", "only a boundary body (boundary = \"fixed\" or \"moving\") has a boundary_state",
+      fail(p + ".boundary_state", "only a boundary body (boundary = \"fixed\", \"moving\" or \"driven\") has a boundary_state",
            t.get("boundary_state"));
     b.boundary_state = choice(t, "boundary_state", p, BoundaryState::Frozen,
                               {{"frozen", BoundaryState::Frozen},
@@ -1210,9 +1291,13 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   // wall_friction x the normal push; physics/wall_friction.hpp).
   for (const char* key : {"wall_slip", "wall_normal", "wall_friction"})
     if (t.contains(key) && b.boundary == BoundaryKind::None)
-      fail(p + "." + key, "only a boundary body (boundary = \"fixed\" or \"moving\") is a wall", t.get(key));
+      fail(p + "." + key, "only a boundary body (boundary = \"fixed\", \"moving\" or \"driven\") is a wall", t.get(key));
   b.wall_slip = choice(t, "wall_slip", p, WallSlip::NoSlip,
                        {{"no_slip", WallSlip::NoSlip}, {"free_slip", WallSlip::FreeSlip}, {"coulomb", WallSlip::Coulomb}});
+  if (b.sliding_wall() && b.rigid_tool())
+    fail(p + ".wall_slip",
+         "a turning or driven tool is a no-slip wall (a sliding wall's normal does not turn with it); remove wall_slip",
+         t.get("wall_slip"));
   if (b.sliding_wall()) {
     const auto n = vector(t, "wall_normal", p);
     if (!n)
@@ -1641,6 +1726,14 @@ Scene SceneReader::read(const toml::table& root) {
                   [](const BodyConfig& b) { return b.boundary != BoundaryKind::None; }))
     fail("bodies", "every body is a boundary (boundary = \"fixed\" or \"moving\"): there is nothing to integrate",
          root.get("bodies"));
+  {
+    std::size_t tools = 0;
+    for (std::size_t k = 0; k < scene.bodies.size(); ++k)
+      if (scene.bodies[k].rigid_tool() && ++tools > std::size_t(kMaxRigidTools))
+        fail("bodies[" + std::to_string(k) + "]",
+             "is rigid tool number " + std::to_string(tools) + "; a run takes at most " + std::to_string(kMaxRigidTools) +
+                 " (turning or driven bodies)");
+  }
 
   // Solids (a material with a shear modulus) evolve the density with the
   // continuity equation: summation underestimates it at free surfaces.

@@ -260,26 +260,34 @@ void read_dataset(hid_t h5file, const std::string& file, const std::string& name
 
 // ---- the restart group -------------------------------------------------------------
 
-void write_int64_list(hid_t loc, const std::string& file, const char* name, const std::vector<std::int64_t>& v) {
+// A 1-D dataset of int64 or double values (the restart group's lists).
+template <class T>
+hid_t list_type() {
+  return std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+}
+
+template <class T>
+void write_list(hid_t loc, const std::string& file, const char* name, const std::vector<T>& v) {
   const std::string where = std::string("'") + name + "'";
   hsize_t dims[1] = {v.size()};
   Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose, file, "H5Screate_simple(" + where + ")");
-  Handle dset(H5Dcreate2(loc, name, H5T_NATIVE_INT64, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+  Handle dset(H5Dcreate2(loc, name, list_type<T>(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
               file, "H5Dcreate2(" + where + ")");
   if (!v.empty())
-    check(H5Dwrite(dset.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dwrite(" + where + ")");
+    check(H5Dwrite(dset.get(), list_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dwrite(" + where + ")");
 }
 
-std::vector<std::int64_t> read_int64_list(hid_t loc, const std::string& file, const char* name) {
+template <class T>
+std::vector<T> read_list(hid_t loc, const std::string& file, const char* name) {
   const std::string where = std::string("'") + name + "'";
   Handle dset(H5Dopen2(loc, name, H5P_DEFAULT), H5Dclose, file, "H5Dopen2(" + where + ")");
   Handle space(H5Dget_space(dset.get()), H5Sclose, file, "H5Dget_space(" + where + ")");
   if (H5Sget_simple_extent_ndims(space.get()) != 1) fail(file, "reading " + where, "expected a 1-D dataset");
   hsize_t dims[1] = {0};
   check(H5Sget_simple_extent_dims(space.get(), dims, nullptr), file, "H5Sget_simple_extent_dims(" + where + ")");
-  std::vector<std::int64_t> v(dims[0]);
+  std::vector<T> v(dims[0]);
   if (!v.empty())
-    check(H5Dread(dset.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dread(" + where + ")");
+    check(H5Dread(dset.get(), list_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dread(" + where + ")");
   return v;
 }
 
@@ -309,7 +317,8 @@ void write_restart_group(hid_t h5, const std::string& file, const ParticleStore<
     write_string_attr(g.get(), file, (k + "_path").c_str(), r.libraries[i].path);
     write_string_attr(g.get(), file, (k + "_text").c_str(), r.libraries[i].text);
   }
-  write_int64_list(g.get(), file, "body_first_id", r.body_first_id);
+  write_list(g.get(), file, "body_first_id", r.body_first_id);
+  if (!r.tool_state.empty()) write_list(g.get(), file, "tool_state", r.tool_state);
   // the allocated fields the snapshot proper leaves out
   for (const auto& f : field_table<D>()) {
     if (f.snapshot) continue;
@@ -364,7 +373,10 @@ RestartState read_restart_attributes(hid_t g, const std::string& path) {
                            read_string_attr(g, path, (k + "_path").c_str()),
                            read_string_attr(g, path, (k + "_text").c_str())});
   }
-  r.body_first_id = read_int64_list(g, path, "body_first_id");
+  r.body_first_id = read_list<std::int64_t>(g, path, "body_first_id");
+  const htri_t tools = H5Lexists(g, "tool_state", H5P_DEFAULT);
+  if (tools < 0) fail(path, "H5Lexists('tool_state')");
+  if (tools > 0) r.tool_state = read_list<double>(g, path, "tool_state");
   return r;
 }
 

@@ -1,7 +1,6 @@
 #pragma once
-// Shared by the unit tests that read a run's conserved.csv: the values of
-// column `name` in `dir`/conserved.csv, one per row (empty when the column
-// is missing).
+// Shared by the unit tests that read a run's CSV files (conserved.csv,
+// boundary_forces.csv): the values of one column, one per row.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -11,8 +10,10 @@
 
 namespace rubble::test {
 
-inline std::vector<double> conserved_column(const std::filesystem::path& dir, const std::string& name) {
-  std::ifstream f(dir / "conserved.csv");
+// The values of column `name` of the CSV file `path` (its first line the
+// header), one per row; empty when the column is missing.
+inline std::vector<double> csv_column(const std::filesystem::path& path, const std::string& name) {
+  std::ifstream f(path);
   std::string line;
   std::getline(f, line);
   std::vector<std::string> head;
@@ -30,6 +31,10 @@ inline std::vector<double> conserved_column(const std::filesystem::path& dir, co
       if (k == col) out.push_back(std::stod(c));
   }
   return out;
+}
+
+inline std::vector<double> conserved_column(const std::filesystem::path& dir, const std::string& name) {
+  return csv_column(dir / "conserved.csv", name);
 }
 
 }  // namespace rubble::test

@@ -74,7 +74,8 @@ ParticleStore<D> make_store(std::size_t n) {
   needs.summation_density = true;
   needs.gravity = true;  // a_grav (a snapshot field) and phi
   needs.solid = true;     // S (a snapshot field) and dSdt
-  needs.boundary = true;  // boundary flags
+  needs.boundary = true;  // boundary flags and wall_force (snapshot fields)
+  needs.rigid_tools = true;  // tool and tool_offset (snapshot fields)
   needs.porosity = true;    // alpha (a snapshot field) and dalphadt
   needs.plasticity = true;  // eps_p (a snapshot field)
   needs.inelastic_volume = true;  // eps_v (a snapshot field)
@@ -237,7 +238,7 @@ TYPED_TEST(SnapshotTest, FileLayoutAndAttributes) {
       EXPECT_EQ(dims[2], hsize_t(D)) << name;
     }
     const hid_t type = H5Dget_type(dset);
-    if (name == "material_id" || name == "id" || name == "boundary" || name == "flaw_count") {
+    if (name == "material_id" || name == "id" || name == "boundary" || name == "flaw_count" || name == "tool") {
       EXPECT_GT(H5Tequal(type, H5T_NATIVE_INT32), 0);
     } else {
       EXPECT_EQ(H5Tget_size(type), sizeof(Real)) << name;
@@ -260,6 +261,9 @@ TYPED_TEST(SnapshotTest, OnlyAllocatedFieldsAreWritten) {
   ps.a_grav.clear();  // no self-gravity
   ps.S.clear();       // no solids
   ps.boundary.clear();  // no boundary bodies
+  ps.wall_force.clear();
+  ps.tool.clear();  // no rigid tools
+  ps.tool_offset.clear();
   ps.alpha.clear();     // no porosity
   ps.eps_p.clear();     // no plasticity
   ps.eps_v.clear();     // no dilatancy

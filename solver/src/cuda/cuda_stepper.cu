@@ -1039,6 +1039,22 @@ void CudaStepper<D>::add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> 
   impl_->steps.add_body_velocity(lo, hi, V, w, centre);
 }
 
+template <int D>
+std::vector<double> CudaStepper<D>::tool_state() const {
+  return impl_->steps.tool_state();
+}
+
+template <int D>
+void CudaStepper<D>::set_tool_state(const std::vector<double>& list) {
+  impl_->host_current = false;
+  impl_->steps.set_tool_state(list);
+}
+
+template <int D>
+ForceSums<D> CudaStepper<D>::held_force(std::int32_t lo, std::int32_t hi, Vec<D> point) {
+  return impl_->steps.held_force(lo, hi, point);
+}
+
 // With the next step's time-step limit (StepSequence::check_state): the
 // loop asks for both of the same state.
 template <int D>

@@ -11,12 +11,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "rubble/core/box.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_log.hpp"
 #include "rubble/io/conserved_sums.hpp"
 #include "rubble/particles/particle_store.hpp"
+#include "rubble/physics/rigid_body.hpp"
 #include "rubble/run.hpp"
 #include "rubble/scene/scene.hpp"
 
@@ -45,6 +47,11 @@ class CudaStepper {
   BodySums<D> body_sums(std::int32_t lo, std::int32_t hi);
   void damp_body(std::int32_t lo, std::int32_t hi, double f, Vec<D> mean, Vec<D> keep);
   void add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre);
+  // Rigid tools (physics/rigid_body.hpp): their states (a restart's list),
+  // and the force and torque of the rest on a body's held particles.
+  std::vector<double> tool_state() const;
+  void set_tool_state(const std::vector<double>& list);
+  ForceSums<D> held_force(std::int32_t lo, std::int32_t hi, Vec<D> point);
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   // The energy bookkeeping (StepSequence): books, watchdog retries.

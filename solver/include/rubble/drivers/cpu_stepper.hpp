@@ -136,6 +136,11 @@ class CpuStepper {
   void add_body_velocity(std::int32_t lo, std::int32_t hi, Vec<D> V, Vec<3> w, Vec<D> centre) {
     steps_.add_body_velocity(lo, hi, V, w, centre);
   }
+  // Rigid tools (physics/rigid_body.hpp): their states (a restart's list),
+  // and the force and torque of the rest on a body's held particles.
+  std::vector<double> tool_state() const { return steps_.tool_state(); }
+  void set_tool_state(const std::vector<double>& list) { steps_.set_tool_state(list); }
+  ForceSums<D> held_force(std::int32_t lo, std::int32_t hi, Vec<D> point) { return steps_.held_force(lo, hi, point); }
   // Index of the first particle with a non-finite state, or n.
   std::size_t first_non_finite() { return steps_.check_state().first_bad; }
   ConservedRecord conserved(double t, std::int64_t step, double dt) const {

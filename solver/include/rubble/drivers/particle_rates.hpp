@@ -857,12 +857,18 @@ RUBBLE_HD_INLINE void solid_rates_particle(const RhsContext<D>& c, std::uint32_t
 // ---- after the pair sums -------------------------------------------------
 
 // Boundary particles move as prescribed: dv/dt = 0, so they keep their
-// velocity (0 when fixed) and move with it. Evolving ones integrate rho, u
-// and S like the rest; frozen and extrapolated ones are not integrated.
+// velocity (0 when fixed) and move with it (rigid tools are placed by
+// their tool's pose instead, StepSequence::place_tools). What the rest
+// exerts on them, m dv/dt (the body force never acts on held particles,
+// body_force_particle), is kept in wall_force first. Evolving ones
+// integrate rho, u and S like the rest; frozen and extrapolated ones are
+// not integrated.
 template <int D>
 RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   if (s.boundary[a] == kFreeParticle) return;
+  // the force of the rest on it (boundary_forces.csv; a driven tool's reaction)
+  if (s.wall_force) s.wall_force[a] = s.m[a] * s.dvdt[a];
   s.dvdt[a] = Vec<D>::zero();
   if (s.boundary[a] == kBoundaryEvolving) return;
   s.dudt[a] = 0;
@@ -879,14 +885,14 @@ RUBBLE_HD_INLINE void hold_boundary_particle(const RhsContext<D>& c, std::uint32
 // pressures they use (extrapolated walls too); a held particle b keeps its
 // velocity and (unless evolving) its u, so what it would have gained,
 // m_b (v_b.dv_b/dt + du_b/dt), went into the others: their gain is minus
-// that. The body force on held particles is left out (their potential
-// energy is not counted either, conserved_sums.hpp). 0 for free particles.
+// that. The body force never acts on held particles (body_force_particle;
+// their potential energy is not counted either, conserved_sums.hpp). 0 for
+// free particles.
 template <int D>
 RUBBLE_HD_INLINE double wall_power_particle(const RhsContext<D>& c, std::uint32_t a) {
   const StoreView<D>& s = c.s;
   if (s.boundary[a] == kFreeParticle) return 0;
-  const Vec<D> dv = c.has_body_force ? s.dvdt[a] - c.body_force : s.dvdt[a];
-  double held = double(dot(s.v[a], dv));
+  double held = double(dot(s.v[a], s.dvdt[a]));
   if (s.boundary[a] != kBoundaryEvolving) held += double(s.dudt[a]);
   return -double(s.m[a]) * held;
 }

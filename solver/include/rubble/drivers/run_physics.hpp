@@ -6,6 +6,7 @@
 // backends, the initial conditions and `rubble eos` read them from here;
 // nothing else converts a scene's configuration into physics parameters.
 // Implemented in solver/src/run_physics.cpp.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,22 @@ PlasticityParams plasticity_params_from_config(const PlasticityConfig& c);
 // One entry per scene material, in material_id order.
 std::vector<MaterialParams> material_params_from_scene(const Scene& scene);
 
+// A rigid tool as the scene gives it (physics/rigid_body.hpp; scene keys
+// in docs/scene.md): tool k is the k-th body with BodyConfig::rigid_tool().
+struct RigidToolSpec {
+  int body = 0;                       // its index in scene.bodies
+  bool driven = false;                // driven by forces; else its motion is prescribed
+  std::array<double, 3> centre{};     // rotation centre at t = 0 [m]
+  std::array<double, 3> velocity{};   // (initial) velocity [m/s]
+  std::array<double, 3> axis{0, 0, 1};
+  double angular_velocity = 0;        // (initial) [rad/s]
+  std::array<double, 3> applied_force{};
+  double applied_torque = 0;
+  std::array<bool, 3> free_axis{true, true, true};
+  bool free_rotation = true;
+  double mass = 0, inertia = 0;       // 0: the particles' own
+};
+
 // Everything the step needs to know of the scene, fixed for the run.
 struct RunPhysics {
   Features on;
@@ -51,6 +68,7 @@ struct RunPhysics {
   bool geometric_force = false;     // simulation.pressure_force = "geometric" (physics/hydro.hpp)
   Real body_force[3] = {0, 0, 0};  // simulation.gravity
   GravityConfig gravity;  // self-gravity ([gravity]; mode Off: none)
+  std::vector<RigidToolSpec> tools;  // rigid tools, in body order (none: empty)
 };
 
 RunPhysics run_physics(const Scene& scene);

@@ -54,6 +54,7 @@
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_sums.hpp"
 #include "rubble/neighbors/search_radius.hpp"
+#include "rubble/physics/rigid_body.hpp"
 
 namespace rubble {
 
@@ -158,6 +159,7 @@ class StepSequence {
     fallbacks_.resize(1);
     be_.zero(fallbacks_);
     energy_tolerance_ = physics.energy_step_tolerance;
+    if (on_.rigid_tools) init_tools();
   }
 
   // ---- what the integrators ask of a system (integrate/)
@@ -226,6 +228,7 @@ class StepSequence {
       }
       if (r.dt_taken <= dt_min) throw energy_jump(r.dt_taken, retries);
       restore_state(be_.integrator_scratch().y0);
+      if (on_.rigid_tools) rigid_rk2_restore();
       books_.wall_power = p0;
       ++energy_retries_;
       ++retries;
@@ -239,6 +242,14 @@ class StepSequence {
     energy_known_ = false;
     const StoreView<D> s = view();
     be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.v[i] *= f; });
+    if (on_.rigid_tools) {  // a driven tool is damped as a whole; a prescribed one keeps its motion
+      for (Tool& t : tools_)
+        if (t.spec.driven) {
+          t.y.V *= f;
+          t.y.omega *= f;
+        }
+      place_tools();
+    }
   }
 
   // ---- bodies as wholes: relaxation in each body's own frame and the
@@ -279,6 +290,198 @@ class StepSequence {
     be_.for_each("launch", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) {
       if (s.id[i] >= lo && s.id[i] < hi) s.v[i] = s.v[i] + rigid_velocity<D>(V, w, s.x[i] - centre);
     });
+  }
+
+  // ---- rigid tools (issue #54 item 1; physics/rigid_body.hpp). Tool k is
+  // the particles with tool == k; each integrator stage sets its state and
+  // places them (the hooks below, called by integrate/).
+  struct Tool {
+    RigidToolSpec spec;
+    Vec<3> n;                   // its axis (z in 2-D)
+    double M = 0, I = 0;        // mass and moment of inertia about the axis through c
+    RigidState<D> y;            // now
+    RigidRates<D> k;            // the rates of the last evaluation (0 unless driven)
+    RigidState<D> y0, y2, half; // the step's start, RK2's second stage, leapfrog's half step
+    RigidRates<D> k0, k2;
+    ForceSums<D> reaction;      // the last evaluation's force and torque (about c) on it
+  };
+  const std::vector<Tool>& tools() const { return tools_; }
+  // Every tool's state as a list (c, theta, V, omega per tool: what a
+  // restart snapshot keeps), and a resumed run's from its snapshot.
+  std::vector<double> tool_state() const {
+    std::vector<double> out;
+    for (const Tool& t : tools_) {
+      for (int a = 0; a < D; ++a) out.push_back(double(t.y.c[a]));
+      out.push_back(double(t.y.theta));
+      for (int a = 0; a < D; ++a) out.push_back(double(t.y.V[a]));
+      out.push_back(double(t.y.omega));
+    }
+    return out;
+  }
+  void set_tool_state(const std::vector<double>& list) {
+    if (list.size() != tools_.size() * std::size_t(2 * D + 2))
+      throw RunError("the restart snapshot holds " + std::to_string(list.size()) + " rigid-tool values, the scene's " +
+                     std::to_string(tools_.size()) + " tools need " + std::to_string(tools_.size() * (2 * D + 2)));
+    std::size_t j = 0;
+    for (Tool& t : tools_) {
+      for (int a = 0; a < D; ++a) t.y.c[a] = Real(list[j++]);
+      t.y.theta = Real(list[j++]);
+      for (int a = 0; a < D; ++a) t.y.V[a] = Real(list[j++]);
+      t.y.omega = Real(list[j++]);
+    }
+    if (!tools_.empty()) place_tools();
+  }
+
+  // The mass, centre and moment of inertia of each tool from its particles.
+  void init_tools() {
+    const StoreView<D> s = view();
+    for (std::size_t t = 0; t < ph_.tools.size(); ++t) {
+      Tool tool;
+      tool.spec = ph_.tools[t];
+      for (int a = 0; a < 3; ++a) tool.n[a] = Real(tool.spec.axis[a]);
+      const std::int32_t k = std::int32_t(t);
+      const Vec<3> n = tool.n;
+      // sums of m, m x, m |r0 perpendicular to the axis|^2
+      const BodySums<D> b = be_.reduce(
+          size(),
+          [=] RUBBLE_LAMBDA(std::uint32_t i) {
+            BodySums<D> r;
+            if (s.tool[i] != k) return r;
+            r.m = double(s.m[i]);
+            r.mx = s.m[i] * s.x[i];
+            r.mv[0] = s.m[i] * axial_distance2<D>(n, s.tool_offset[i]);  // (the moment of inertia, in mv's slot)
+            return r;
+          },
+          BodySums<D>{}, BodySumOp<D>{});
+      if (!(b.m > 0)) throw RunError("rigid tool " + std::to_string(t) + " (bodies[" + std::to_string(tool.spec.body) + "]) holds no particle");
+      tool.M = tool.spec.mass > 0 ? tool.spec.mass : b.m;
+      tool.I = tool.spec.inertia > 0 ? tool.spec.inertia : double(b.mv[0]);
+      if (tool.spec.driven && tool.spec.free_rotation && D > 1 && !(tool.I > 0))
+        throw RunError("rigid tool " + std::to_string(t) + " (bodies[" + std::to_string(tool.spec.body) +
+                       "]) has no moment of inertia about its axis; give tool_inertia or driven_rotation = false");
+      // the reference point: a driven tool's centre of mass (its offsets are
+      // taken from it, initial_conditions), a prescribed tool's rotation_center
+      for (int a = 0; a < D; ++a) {
+        tool.y.c[a] = tool.spec.driven ? Real(double(b.mx[a]) / b.m) : Real(tool.spec.centre[a]);
+        tool.y.V[a] = Real(tool.spec.velocity[a]);
+      }
+      tool.y.omega = Real(tool.spec.angular_velocity);
+      tools_.push_back(tool);
+    }
+  }
+
+  // Every tool's pose (by value, for the placement loop).
+  RigidPoses<D> poses() const {
+    RigidPoses<D> p;
+    p.count = int(tools_.size());
+    for (std::size_t t = 0; t < tools_.size(); ++t) {
+      const Tool& tool = tools_[t];
+      p.pose[t] = {tool.y.c, rotation_about<D>(tool.n, tool.y.theta), tool.y.V, tool.n, tool.y.omega};
+    }
+    return p;
+  }
+  // Each tool particle at its tool's pose: x = c + R r0, v = V + omega n x R r0.
+  void place_tools() {
+    if (tools_.empty()) return;
+    const RigidPoses<D> P = poses();
+    const StoreView<D> s = view();
+    const Box<D> dom = domain_;
+    be_.for_each("place tools", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) {
+      const int k = s.tool[i];
+      if (k < 0) return;
+      place_rigid_particle<D>(P.pose[k], s.tool_offset[i], s.x[i], s.v[i]);
+      s.x[i] = dom.wrap(s.x[i]);
+    });
+  }
+  // After an evaluation's hold pass: each tool's reaction (from wall_force),
+  // and a driven tool's rates from it.
+  void tool_rates() {
+    const StoreView<D> s = view();
+    const Box<D> dom = domain_;
+    for (std::size_t t = 0; t < tools_.size(); ++t) {
+      Tool& tool = tools_[t];
+      const std::int32_t k = std::int32_t(t);
+      const Vec<D> c = tool.y.c;
+      tool.reaction = be_.reduce(
+          size(),
+          [=] RUBBLE_LAMBDA(std::uint32_t i) {
+            return s.tool[i] == k ? force_sums_term<D>(dom.separation(s.x[i], c), s.wall_force[i]) : ForceSums<D>{};
+          },
+          ForceSums<D>{}, ForceSumOp<D>{});
+      if (!tool.spec.driven) continue;
+      Vec<D> F, Fa;
+      bool free_axis[3];
+      for (int a = 0; a < D; ++a) {
+        F[a] = Real(tool.reaction.F[a]);
+        Fa[a] = Real(tool.spec.applied_force[a]);
+        free_axis[a] = tool.spec.free_axis[a];
+      }
+      double T = 0;  // about the axis
+      for (int a = 0; a < 3; ++a) T += tool.reaction.T[a] * double(tool.n[a]);
+      tool.k = driven_rates<D>(F, Real(T), Fa, Real(tool.spec.applied_torque), g_, Real(tool.M), Real(tool.I), free_axis,
+                               tool.spec.free_rotation && D > 1);
+    }
+  }
+  // leapfrog (integrate/leapfrog.hpp): kick to the half step and drift;
+  // the evaluation sees the predicted end-of-step motion (v_{1/2} with the
+  // staggered update), as the particles do
+  void rigid_drift(Real dt, bool staggered) {
+    const Real h = Real(0.5) * dt;
+    for (Tool& t : tools_) {
+      t.half.V = t.y.V + h * t.k.A;
+      t.half.omega = t.y.omega + h * t.k.alpha;
+      t.y.c += dt * t.half.V;
+      t.y.theta += dt * t.half.omega;
+      t.y.V = staggered ? t.half.V : t.half.V + h * t.k.A;
+      t.y.omega = staggered ? t.half.omega : t.half.omega + h * t.k.alpha;
+    }
+    place_tools();
+  }
+  void rigid_kick(Real dt) {
+    const Real h = Real(0.5) * dt;
+    for (Tool& t : tools_) {
+      t.y.V = t.half.V + h * t.k.A;
+      t.y.omega = t.half.omega + h * t.k.alpha;
+    }
+    place_tools();
+  }
+  // rk2_adaptive (integrate/rk2_adaptive.hpp)
+  void rigid_rk2_begin() {
+    for (Tool& t : tools_) {
+      t.y0 = t.y;
+      t.k0 = t.k;
+    }
+  }
+  void rigid_rk2_stage(Real w, bool with_k2) {
+    for (Tool& t : tools_)
+      t.y = rigid_combine<D>(t.y0, t.y0, t.k0, with_k2 ? &t.y2 : nullptr, with_k2 ? &t.k2 : nullptr, w);
+    place_tools();
+  }
+  void rigid_rk2_keep_k2() {
+    for (Tool& t : tools_) {
+      t.y2 = t.y;
+      t.k2 = t.k;
+    }
+  }
+  void rigid_rk2_restore() {
+    for (Tool& t : tools_) {
+      t.y = t.y0;
+      t.k = t.k0;
+    }
+  }
+
+  // The force and torque (about `point`) of the rest on the held particles
+  // with id in [lo, hi), from the last evaluation (boundary_forces.csv).
+  ForceSums<D> held_force(std::int32_t lo, std::int32_t hi, Vec<D> point) {
+    const StoreView<D> s = view();
+    const Box<D> dom = domain_;
+    return be_.reduce(
+        size(),
+        [=] RUBBLE_LAMBDA(std::uint32_t i) {
+          if (s.id[i] < lo || s.id[i] >= hi || s.boundary[i] == kFreeParticle) return ForceSums<D>{};
+          return force_sums_term<D>(dom.separation(s.x[i], point), s.wall_force[i]);
+        },
+        ForceSums<D>{}, ForceSumOp<D>{});
   }
 
   // ---- energy bookkeeping (issue #50 items 1 and 2)
@@ -680,6 +883,7 @@ class StepSequence {
         size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { return wall_power_particle<D>(c, i); }, 0.0, DoubleSum{});
     powers_.push_back(books_.wall_power);
     be_.for_each("hold boundaries", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { hold_boundary_particle<D>(c, i); });
+    if (on_.rigid_tools) tool_rates();
   }
 
   // XSPH: the smoothed-velocity correction to dx/dt (physics/xsph.hpp).
@@ -739,6 +943,7 @@ class StepSequence {
   int e_first_ = 0;
   double last_change_ = 0, last_bound_ = 0;
   std::int64_t energy_retries_ = 0;
+  std::vector<Tool> tools_;          // rigid tools (none: empty)
 };
 
 }  // namespace rubble

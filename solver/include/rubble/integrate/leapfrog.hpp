@@ -133,7 +133,9 @@ struct IntegratorScratch {
 // system): size(), view(), domain(), integrator_scratch(),
 // for_each(what, n, f) running f(i) for every particle, evaluate(), and
 // end_step(alpha_start, dt); with the staggered stress update also
-// evaluate_staggered(dt) (which advances S and rho between its passes).
+// evaluate_staggered(dt) (which advances S and rho between its passes);
+// with rigid tools rigid_drift(dt, staggered) and rigid_kick(dt), the
+// tools' own halves of the step (drivers/step_sequence.hpp).
 template <int D, class System>
 void leapfrog_step(System& sys, Real dt, bool staggered = false) {
   const std::size_t n = sys.size();
@@ -162,6 +164,10 @@ void leapfrog_step(System& sys, Real dt, bool staggered = false) {
   const Box<D> domain = sys.domain();
   sys.for_each("leapfrog kick-drift", n,
                [=] RUBBLE_LAMBDA(std::uint32_t i) { leapfrog_kick_drift<D>(s, half, domain, i, dt); });
+  // rigid tools (physics/rigid_body.hpp), when the system has them: their
+  // own kick-drift, and their particles placed at the new pose
+  constexpr bool tools = requires { sys.rigid_drift(dt, staggered); };
+  if constexpr (tools) sys.rigid_drift(dt, staggered);
   if constexpr (requires { sys.evaluate_staggered(dt); }) {
     if (staggered) sys.evaluate_staggered(dt);
     else sys.evaluate();
@@ -170,6 +176,7 @@ void leapfrog_step(System& sys, Real dt, bool staggered = false) {
     sys.evaluate();
   }
   sys.for_each("leapfrog kick", n, [=] RUBBLE_LAMBDA(std::uint32_t i) { leapfrog_kick<D>(s, half, i, dt); });
+  if constexpr (tools) sys.rigid_kick(dt);
   sys.end_step(alpha_start, dt);
 }
 

@@ -134,20 +134,28 @@ Rk2Result rk2_adaptive_step(System& sys, Real dt, Real tol, Real dt_min) {
   const StoreView<D> v0 = sys.view_of(w.y0);
   const Box<D> domain = sys.domain();
   int rejections = 0;
+  // rigid tools (physics/rigid_body.hpp), when the system has them, take
+  // the same stages: rigid_rk2_stage(w, with_k2) sets each tool to
+  // y_n + w (k1 [+ k2]) and places its particles
+  constexpr bool tools = requires { sys.rigid_rk2_begin(); };
+  if constexpr (tools) sys.rigid_rk2_begin();
 
   for (;;) {
     const StoreView<D> y = sys.view();
     // stage 2: y_n + dt k1
     sys.for_each("rk2 stage 2", n,
                  [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, nullptr, dt, domain, i); });
+    if constexpr (tools) sys.rigid_rk2_stage(dt, false);
     sys.evaluate();
     sys.save_state(w.y1);  // k2 = rates of y1
+    if constexpr (tools) sys.rigid_rk2_keep_k2();
     const StoreView<D> v1 = sys.view_of(w.y1);
 
     // stage 3: y_n + dt/4 (k1 + k2)
     const Real q = Real(0.25) * dt;
     sys.for_each("rk2 stage 3", n,
                  [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, &v1, q, domain, i); });
+    if constexpr (tools) sys.rigid_rk2_stage(q, true);
     sys.evaluate();  // k3 = rates in the store
 
     // Heun solution and the error against SSP-RK3
@@ -160,12 +168,14 @@ Rk2Result rk2_adaptive_step(System& sys, Real dt, Real tol, Real dt_min) {
       const Real h2 = Real(0.5) * dt;
       sys.for_each("rk2 final", n,
                    [=] RUBBLE_LAMBDA(std::uint32_t i) { rk2_combine<D>(y, v0, v0, &v1, h2, domain, i); });
+      if constexpr (tools) sys.rigid_rk2_stage(h2, true);
       sys.end_step(v0.alpha, dt);
       sys.evaluate();  // k1 of the next step
       return {dt, dt * factor, rejections};
     }
     // rejected: back to y_n with a smaller step
     sys.restore_state(w.y0);
+    if constexpr (tools) sys.rigid_rk2_restore();
     dt = std::max(dt * factor, dt_min);
     ++rejections;
   }

@@ -46,26 +46,44 @@ struct ConservedRecord {
   }
 };
 
-class ConservedLog {
+// A CSV file written a line at a time and flushed after each (so it is
+// complete up to the last line if the run dies), whose first two columns
+// are time and step: conserved.csv, boundary_forces.csv.
+class CsvLog {
  public:
-  // Creates (truncates) `path` and writes the header. Throws
+  // Creates (truncates) `path` and writes `header`. Throws
   // std::runtime_error naming the file if it cannot.
-  ConservedLog(const std::string& path, int dimension);
+  CsvLog(const std::string& path, const std::string& header);
   // A resumed run (issue #13): `path` gets the header and the rows of
-  // `history` (a conserved.csv of the interrupted run, may be `path`
-  // itself or missing) up to and including step `last_step`, written
-  // atomically; later rows are appended. A history with another header is an
-  // error naming it.
+  // `history` (the same file of the interrupted run, may be `path` itself
+  // or missing) up to and including step `last_step`, written atomically;
+  // later rows are appended. A history with another header is an error
+  // naming it.
+  CsvLog(const std::string& path, const std::string& header, const std::string& history, std::int64_t last_step);
+  void append_line(const std::string& line);  // without the newline
+
+ private:
+  std::string path_;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_;
+};
+
+// One line of such a file, values in full double precision (%.17g).
+struct CsvLine {
+  std::string text;
+  void put(double v);
+  void put(std::int64_t v);
+};
+
+class ConservedLog : public CsvLog {
+ public:
+  ConservedLog(const std::string& path, int dimension);
   ConservedLog(const std::string& path, int dimension, const std::string& history, std::int64_t last_step);
   void append(const ConservedRecord& r);
-
   // The header line for `dimension`, without the newline.
   static std::string header(int dimension);
 
  private:
-  std::string path_;
   int dim_;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_;
 };
 
 // Mass, momentum, angular momentum (about the origin), kinetic and internal

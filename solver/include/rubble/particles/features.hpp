@@ -14,7 +14,8 @@ struct Features {
   bool summation_density = false;   // grad-h factor omega is stored
   bool gravity = false;             // self-gravity (3-D): a_grav and phi are stored
   bool solid = false;               // a material has a shear modulus: S and dSdt; feature set Solid
-  bool boundary = false;            // a body is made of boundary particles: held each evaluation
+  bool boundary = false;            // a body is made of boundary particles: held each evaluation; wall_force
+  bool rigid_tools = false;         // a boundary body turns or is driven (physics/rigid_body.hpp): tool, tool_offset
   bool xsph = false;                // XSPH: the position-rate correction is stored
   bool kernel_correction = false;   // solids with simulation.kernel_correction: K = C^T is stored
   bool porosity = false;            // a material is porous (p-alpha): alpha and dalphadt; envelope return

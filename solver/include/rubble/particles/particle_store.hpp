@@ -61,6 +61,15 @@ struct ParticleStore {
   // boundary particles (allocated only when a body is a boundary): one of
   // the flags below (kFreeParticle ... kBoundaryExtrapolated)
   std::vector<std::int32_t> boundary;
+  // ... and on them the force the other particles exert on each, m (dv/dt - g)
+  // of its rates before they are held (boundary_forces.csv sums it by body)
+  std::vector<Vec<D>> wall_force;  // [N] (2-D: N/m)
+
+  // rigid tools (allocated only when a boundary body turns or is driven;
+  // physics/rigid_body.hpp): the particle's tool (-1: none) and its offset
+  // from the tool's rotation centre at t = 0, from which it is placed
+  std::vector<std::int32_t> tool;  // [1]
+  std::vector<Vec<D>> tool_offset;  // [m]
 
   // XSPH (allocated only when simulation.xsph > 0): dx/dt = v + xsph_v
   std::vector<Vec<D>> xsph_v;  // [m/s]
@@ -178,6 +187,9 @@ inline const std::vector<FieldInfo<D>>& field_table() {
       {"S", &PS::S, "Pa", FieldRole::Evolved, true},
       {"dSdt", &PS::dSdt, "Pa/s", FieldRole::Rate, false},
       {"boundary", &PS::boundary, "1", FieldRole::Constant, true},
+      {"wall_force", &PS::wall_force, "N", FieldRole::Derived, true},
+      {"tool", &PS::tool, "1", FieldRole::Constant, true},
+      {"tool_offset", &PS::tool_offset, "m", FieldRole::Constant, true},
       {"xsph_v", &PS::xsph_v, "m/s", FieldRole::Derived, false},
       {"corr_K", &PS::corr_K, "1", FieldRole::Derived, false},
       {"alpha", &PS::alpha, "1", FieldRole::Evolved, true},
@@ -230,7 +242,14 @@ void ParticleStore<D>::allocate(std::size_t count, const Features& needs) {
     S.assign(n, Mat<D>::zero());
     dSdt.assign(n, Mat<D>::zero());
   }
-  if (needs.boundary) boundary.assign(n, 0);
+  if (needs.boundary) {
+    boundary.assign(n, 0);
+    wall_force.assign(n, Vec<D>::zero());
+  }
+  if (needs.rigid_tools) {
+    tool.assign(n, -1);
+    tool_offset.assign(n, Vec<D>::zero());
+  }
   if (needs.xsph) xsph_v.assign(n, Vec<D>::zero());
   if (needs.kernel_correction) corr_K.assign(n, Mat<D>::identity());
   if (needs.porosity) {

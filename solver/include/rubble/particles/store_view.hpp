@@ -50,6 +50,9 @@ struct StoreView {
   Mat<D>* S = nullptr;
   Mat<D>* dSdt = nullptr;
   std::int32_t* boundary = nullptr;
+  Vec<D>* wall_force = nullptr;
+  std::int32_t* tool = nullptr;
+  Vec<D>* tool_offset = nullptr;
   Vec<D>* xsph_v = nullptr;
   Mat<D>* corr_K = nullptr;
   Real* alpha = nullptr;
@@ -87,6 +90,7 @@ struct StoreView {
     set(h, "h"), set(p, "p"), set(cs, "cs"), set(omega, "omega"), set(dvdt, "dvdt"), set(dudt, "dudt");
     set(drhodt, "drhodt"), set(mu_max, "mu_max"), set(a_grav, "a_grav"), set(phi, "phi"), set(S, "S");
     set(dSdt, "dSdt"), set(boundary, "boundary"), set(xsph_v, "xsph_v");
+    set(wall_force, "wall_force"), set(tool, "tool"), set(tool_offset, "tool_offset");
     set(corr_K, "corr_K");
     set(alpha, "alpha"), set(dalphadt, "dalphadt"), set(eps_p, "eps_p"), set(eps_v, "eps_v");
     set(wall_normal, "wall_normal"), set(wall_friction, "wall_friction"), set(wall_anchor, "wall_anchor");

@@ -179,10 +179,12 @@ struct MaterialConfig {
 // on nested shells (scene/layered_body.hpp).
 enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3, Layered = 4 };
 enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
-// Boundary particles (walls, clamps): not integrated, but neighbours of the
-// others with their own state. Fixed: at rest; moving: with the body's
-// velocity, for ever.
-enum class BoundaryKind : int { None = 0, Fixed = 1, Moving = 2 };
+// Boundary particles (walls, clamps, tools): not integrated, but neighbours
+// of the others with their own state. Fixed: at rest; moving: with the
+// body's velocity (and angular velocity) for ever; driven: a rigid body
+// moved by the forces of the material on it and an applied load
+// (physics/rigid_body.hpp).
+enum class BoundaryKind : int { None = 0, Fixed = 1, Moving = 2, Driven = 3 };
 // What a boundary body's particles do with their state (BodyConfig::boundary_state).
 enum class BoundaryState : int { Frozen = 0, Evolving = 1, Extrapolated = 2 };
 inline const char* boundary_state_name(BoundaryState s) {
@@ -238,6 +240,25 @@ struct BodyConfig {
   std::array<double, 3> wall_normal{};
   double wall_friction = 0;  // Coulomb friction coefficient mu (>= 0)
   bool sliding_wall() const { return wall_slip != WallSlip::NoSlip; }
+  // Rigid tools (physics/rigid_body.hpp): a moving body that turns
+  // (angular_velocity != 0) or a driven body. It turns about rotation_axis
+  // (3-D; z in 2-D) through rotation_center (default: the shape's centre).
+  // Driven: applied_force and applied_torque act besides the material's
+  // reaction; driven_axes and driven_rotation say which components respond
+  // (the others keep their initial value); tool_mass and tool_inertia
+  // replace the mass and moment of inertia of its particles when > 0.
+  double angular_velocity = 0;                  // [rad/s] about rotation_axis
+  std::array<double, 3> rotation_axis{0, 0, 1};  // unit
+  std::array<double, 3> rotation_center{};       // [m]
+  std::array<double, 3> applied_force{};         // [N] (2-D: N/m)
+  double applied_torque = 0;                     // [N m] about rotation_axis (2-D: N m/m)
+  std::array<bool, 3> driven_axes{true, true, true};
+  bool driven_rotation = true;
+  double tool_mass = 0;     // [kg] (2-D: kg/m); 0: the particles' mass
+  double tool_inertia = 0;  // [kg m^2] (2-D: kg m^2/m); 0: the particles'
+  bool rigid_tool() const {
+    return boundary == BoundaryKind::Driven || (boundary == BoundaryKind::Moving && angular_velocity != 0);
+  }
   // shape = "polytrope" (3-D only): a self-gravitating polytrope in
   // hydrostatic equilibrium, p = K rho^(1+1/n) with rho from the Lane-Emden
   // solution; K follows from radius, mass, n and gravity.G. The parser
