@@ -105,6 +105,11 @@ void expect_restart_identical(const std::string& text, const std::string& name, 
   EXPECT_EQ(ma.restart.dt_proposal, mb.restart.dt_proposal);
   // conserved.csv: the old rows up to the restart step, then the same rows
   EXPECT_EQ(slurp(a / "conserved.csv"), slurp(b / "conserved.csv"));
+  // boundary_forces.csv likewise (runs with boundary bodies)
+  EXPECT_EQ(fs::exists(a / "boundary_forces.csv"), fs::exists(b / "boundary_forces.csv"));
+  if (fs::exists(a / "boundary_forces.csv")) {
+    EXPECT_EQ(slurp(a / "boundary_forces.csv"), slurp(b / "boundary_forces.csv"));
+  }
   // no snapshot before the restart point is rewritten into the new directory
   EXPECT_FALSE(fs::exists(b / snapshot_filename(scene.output.name, from)));
   EXPECT_TRUE(fs::exists(b / snapshot_filename(scene.output.name, from + 1)));
@@ -209,6 +214,23 @@ std::string damage_scene(const std::string& integrator) {
   return s + "[output]\ninterval = 0.2\n";
 }
 
+// Water stirred by a turning paddle lowered into it while a driven block (free to move and
+// turn) falls into it: the tools' states must travel in the snapshot.
+std::string tool_scene(const std::string& integrator) {
+  return "[simulation]\ndimension = 2\nend_time = 0.08\nintegrator = \"" + integrator +
+         "\"\ngravity = [0.0, -9.81]\n"
+         "[materials.water]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1000.0, K0 = 2.0e5, n = 7.0 }\n"
+         "[[bodies]]\nshape = \"box\"\nmaterial = \"water\"\nmin = [0.0, 0.0]\nmax = [0.6, 0.3]\nspacing = 0.03\n"
+         "density = 1000.0\npressure = 0.0\n"
+         "[[bodies]]\nshape = \"box\"\nmaterial = \"water\"\nmin = [-0.09, -0.09]\nmax = [0.69, 0.0]\nspacing = 0.03\n"
+         "density = 1000.0\npressure = 0.0\nboundary = \"fixed\"\nboundary_state = \"extrapolated\"\n"
+         "[[bodies]]\nshape = \"box\"\nmaterial = \"water\"\nmin = [0.1, 0.33]\nmax = [0.25, 0.39]\nspacing = 0.03\n"
+         "density = 1000.0\npressure = 0.0\nboundary = \"moving\"\nvelocity = [0.0, -1.0]\nangular_velocity = 6.0\n"
+         "[[bodies]]\nshape = \"box\"\nmaterial = \"water\"\nmin = [0.4, 0.3]\nmax = [0.55, 0.39]\nspacing = 0.03\n"
+         "density = 1000.0\npressure = 0.0\nboundary = \"driven\"\nvelocity = [0.0, -1.0]\nangular_velocity = 1.0\n"
+         "[output]\ninterval = 0.02\n";
+}
+
 // A self-gravitating polytrope (Barnes-Hut).
 std::string gravity_scene(const std::string& integrator) {
   return "[simulation]\ndimension = 3\nend_time = 0.2\nintegrator = \"" + integrator +
@@ -251,6 +273,8 @@ TEST(Restart, ViscositySwitchIsBitIdentical) {
     expect_restart_identical<2>(text, std::string("avsw_") + integrator, 2);
   }
 }
+TEST(Restart, RigidToolsLeapfrogAreBitIdentical) { expect_restart_identical<2>(tool_scene("leapfrog"), "tools_lf", 2); }
+TEST(Restart, RigidToolsRk2AreBitIdentical) { expect_restart_identical<2>(tool_scene("rk2_adaptive"), "tools_rk2", 1); }
 TEST(Restart, SelfGravityLeapfrogIsBitIdentical) { expect_restart_identical<3>(gravity_scene("leapfrog"), "grav_lf", 2); }
 TEST(Restart, SelfGravityRk2IsBitIdentical) { expect_restart_identical<3>(gravity_scene("rk2_adaptive"), "grav_rk2", 1); }
 

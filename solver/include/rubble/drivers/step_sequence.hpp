@@ -329,7 +329,9 @@ class StepSequence {
       for (int a = 0; a < D; ++a) t.y.V[a] = Real(list[j++]);
       t.y.omega = Real(list[j++]);
     }
-    if (!tools_.empty()) place_tools();
+    if (tools_.empty()) return;
+    place_tools();
+    tool_rates();  // from the snapshot's wall_force: the rates of its last evaluation
   }
 
   // The mass, centre and moment of inertia of each tool from its particles.
