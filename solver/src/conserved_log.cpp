@@ -86,6 +86,10 @@ void CsvLine::put(double v) {
   if (!text.empty()) text += ',';
   text += buf;
 }
+void CsvLine::put(const std::string& v) {
+  if (!text.empty()) text += ',';
+  text += v;
+}
 void CsvLine::put(std::int64_t v) {
   if (!text.empty()) text += ',';
   text += std::to_string(v);

@@ -34,20 +34,50 @@ double lattice_cell_volume(Lattice lattice, double dx) {
   return v;
 }
 
-// Whether x belongs to a sphere or ring body (boxes keep every lattice point).
+// Whether x belongs to the body's own shape: a box's min..max, a sphere's
+// or ring's radii, a polygon's or cylinder's region (core/region.hpp); the
+// unit lattice of a polytrope keeps its whole box.
 template <int D>
 static bool inside_shape(const BodyConfig& b, const Vec<D>& x) {
-  if (b.shape != BodyShape::Sphere && b.shape != BodyShape::Ring) return true;
-  double r2 = 0;
-  for (int k = 0; k < D; ++k) r2 += (x[k] - b.center[k]) * (x[k] - b.center[k]);
-  const double r = std::sqrt(r2);
-  if (b.shape == BodyShape::Ring) return r >= b.inner_radius && r < b.radius;
-  return r < b.radius;
+  double p[3] = {0, 0, 0};
+  for (int k = 0; k < D; ++k) p[k] = double(x[k]);
+  switch (b.shape) {
+    case BodyShape::Sphere:
+    case BodyShape::Ring: {
+      double r2 = 0;
+      for (int k = 0; k < D; ++k) r2 += (p[k] - b.center[k]) * (p[k] - b.center[k]);
+      const double r = std::sqrt(r2);
+      return b.shape == BodyShape::Ring ? r >= b.inner_radius && r < b.radius : r < b.radius;
+    }
+    case BodyShape::Polygon:
+    case BodyShape::Cylinder: return b.region.contains<D>(p);
+    case BodyShape::Box:
+    case BodyShape::Polytrope:
+    case BodyShape::Layered: break;
+  }
+  for (int k = 0; k < D; ++k)
+    if (!(p[k] >= b.min[k] && p[k] < b.max[k])) return false;
+  return true;
 }
 
-// Lattice points inside [lo, hi), then inside the body's shape. A sphere
-// or ring uses the box centre +- radius, with the lattice centred on the
-// body's centre so the shape is symmetric. Cubic: cell centres.
+// Whether x belongs to the body: its shape or a region it adds, and none it
+// subtracts (scene keys `add`, `subtract`).
+template <int D>
+static bool inside_body(const BodyConfig& b, const Vec<D>& x) {
+  double p[3] = {0, 0, 0};
+  for (int k = 0; k < D; ++k) p[k] = double(x[k]);
+  bool in = inside_shape<D>(b, x);
+  for (const Region& r : b.add) in = in || r.contains<D>(p);
+  if (!in) return false;
+  for (const Region& r : b.subtract)
+    if (r.contains<D>(p)) return false;
+  return true;
+}
+
+// Lattice points of the body (inside_body). A sphere or ring uses the box
+// centre +- radius, with the lattice centred on the body's centre so the
+// shape is symmetric; regions it adds extend the lattice by whole cells,
+// so one lattice fills the composed shape. Cubic: cell centres.
 // Hexagonal / HCP: rows offset by dx/2, layers (3-D) in the A-B stacking
 // of close packing.
 template <int D>
@@ -68,14 +98,22 @@ std::vector<Vec<D>> lattice_points(BodyConfig b) {  // declared in initial_condi
   const double dy = hex ? dx * std::sqrt(3.0) / 2.0 : dx;
   const double dz = hex ? dx * std::sqrt(2.0 / 3.0) : dx;
   const double step[3] = {dx, dy, dz};
+  // the lattice's extent: the shape's box, grown by whole steps over the
+  // regions added (the same lattice continues into them)
+  double lo[3] = {b.min[0], b.min[1], b.min[2]}, hi[3] = {b.max[0], b.max[1], b.max[2]};
+  for (const Region& r : b.add)
+    for (int k = 0; k < D; ++k) {
+      if (r.min[k] < lo[k]) lo[k] -= std::ceil((lo[k] - r.min[k]) / step[k] - 1e-9) * step[k];
+      if (r.max[k] > hi[k]) hi[k] += std::ceil((r.max[k] - hi[k]) / step[k] - 1e-9) * step[k];
+    }
   long count[3] = {1, 1, 1};
-  for (int k = 0; k < D; ++k) count[k] = std::lround(std::floor((b.max[k] - b.min[k]) / step[k] + 1e-9));
+  for (int k = 0; k < D; ++k) count[k] = std::lround(std::floor((hi[k] - lo[k]) / step[k] + 1e-9));
   for (long k2 = 0; k2 < count[2]; ++k2)
     for (long k1 = 0; k1 < count[1]; ++k1)
       for (long k0 = 0; k0 < count[0]; ++k0) {
         const long idx[3] = {k0, k1, k2};
         Vec<D> x;
-        for (int k = 0; k < D; ++k) x[k] = Real(b.min[k] + (idx[k] + 0.5) * step[k]);
+        for (int k = 0; k < D; ++k) x[k] = Real(lo[k] + (idx[k] + 0.5) * step[k]);
         if (hex) {
           // odd rows shift by dx/2; odd layers shift by (dx/2, dy/3). A point
           // shifted past the box wraps to its far side, so a box whose sides
@@ -83,11 +121,9 @@ std::vector<Vec<D>> lattice_points(BodyConfig b) {  // declared in initial_condi
           x[0] += Real(0.5 * dx * ((k1 + k2) % 2));
           if constexpr (D == 3) x[1] += Real(dy / 3.0 * (k2 % 2));
           for (int k = 0; k < 2; ++k)
-            if (x[k] >= b.max[k]) x[k] -= Real(b.max[k] - b.min[k]);
+            if (x[k] >= hi[k]) x[k] -= Real(hi[k] - lo[k]);
         }
-        bool inside = true;
-        for (int k = 0; k < D; ++k) inside = inside && x[k] >= b.min[k] && x[k] < b.max[k];
-        if (inside && inside_shape<D>(b, x)) pts.push_back(x);
+        if (inside_body<D>(b, x)) pts.push_back(x);
       }
   return pts;
 }

@@ -133,6 +133,39 @@ std::string boundary_forces_header(int dim) {
   return h;
 }
 
+// regions.csv (docs/user-guide.md, "Measuring regions"): for each
+// [[regions]] entry, the count and mass of the free particles inside it,
+// in all and by material.
+std::string regions_header(const Scene& scene) {
+  std::string h = "time,step,region,count,mass";
+  for (const MaterialConfig& m : scene.materials) h += ",mass_" + m.name;
+  return h;
+}
+
+template <int D, class Stepper>
+std::vector<std::string> region_lines(const Scene& scene, Stepper& sys, double t, std::int64_t step) {
+  std::vector<std::string> lines;
+  for (const MeasureRegionConfig& r : scene.regions) {
+    int tool = -1;  // the followed body's number among the rigid tools
+    if (r.follow >= 0) {
+      tool = 0;
+      for (int b = 0; b < r.follow; ++b) tool += scene.bodies[std::size_t(b)].rigid_tool() ? 1 : 0;
+    }
+    const RegionSums sums = sys.region_sums(r.region, tool);
+    double total = 0;
+    for (std::size_t m = 0; m < scene.materials.size(); ++m) total += sums.mass[m];
+    CsvLine line;
+    line.put(t);
+    line.put(step);
+    line.put(r.name);
+    line.put(std::int64_t(sums.count));
+    line.put(total);
+    for (std::size_t m = 0; m < scene.materials.size(); ++m) line.put(sums.mass[m]);
+    lines.push_back(line.text);
+  }
+  return lines;
+}
+
 template <int D, class Stepper>
 std::vector<std::string> boundary_force_lines(const Scene& scene, Stepper& sys, const std::vector<std::int64_t>& first,
                                               double t, std::int64_t step) {
@@ -146,7 +179,7 @@ std::vector<std::string> boundary_force_lines(const Scene& scene, Stepper& sys, 
     Vec<D> point, V;
     double angle = 0, omega = 0;
     if (body.rigid_tool()) {
-      const double* y = tools.data() + tool++ * (2 * D + 2);
+      const double* y = tools.data() + tool++ * kRigidStateValues<D>;
       for (int k = 0; k < D; ++k) {
         point[k] = Real(y[k]);
         V[k] = Real(y[D + 1 + k]);
@@ -251,9 +284,12 @@ class OutputWriter {
     const std::string forces = (dir_ / "boundary_forces.csv").string();
     const bool walls = std::any_of(scene_.bodies.begin(), scene_.bodies.end(),
                                    [](const BodyConfig& b) { return b.boundary != BoundaryKind::None; });
+    const std::string regions = (dir_ / "regions.csv").string();
+    const bool measured = !scene_.regions.empty();
     if (!start.resumed) {
       guarded([&] { log_ = std::make_unique<ConservedLog>(csv, D); });
       if (walls) guarded([&] { forces_ = std::make_unique<CsvLog>(forces, boundary_forces_header(D)); });
+      if (measured) guarded([&] { regions_ = std::make_unique<CsvLog>(regions, regions_header(scene_)); });
       return;
     }
     // Resumed: into the restart snapshot's own directory, the run's
@@ -278,6 +314,11 @@ class OutputWriter {
         forces_ = std::make_unique<CsvLog>(forces, boundary_forces_header(D),
                                            (start.from_dir / "boundary_forces.csv").string(), start.step);
       });
+    if (measured)
+      guarded([&] {
+        regions_ = std::make_unique<CsvLog>(regions, regions_header(scene_), (start.from_dir / "regions.csv").string(),
+                                            start.step);
+      });
   }
 
  public:
@@ -292,6 +333,11 @@ class OutputWriter {
   bool logs_forces() const { return enabled_ && forces_ != nullptr; }
   void log_forces(const std::vector<std::string>& lines) {
     if (logs_forces()) guarded([&] { for (const std::string& l : lines) forces_->append_line(l); });
+  }
+  // Whether regions.csv is written (a scene with [[regions]]).
+  bool logs_regions() const { return enabled_ && regions_ != nullptr; }
+  void log_regions(const std::vector<std::string>& lines) {
+    if (logs_regions()) guarded([&] { for (const std::string& l : lines) regions_->append_line(l); });
   }
 
   // The next regular snapshot; `loop` is the state after it (the next
@@ -383,6 +429,7 @@ class OutputWriter {
   double slowest_write_ = 0;
   std::unique_ptr<XdmfWriter> xdmf_;
   std::unique_ptr<CsvLog> forces_;  // boundary_forces.csv (boundary bodies only)
+  std::unique_ptr<CsvLog> regions_;  // regions.csv ([[regions]] only)
   std::unique_ptr<ConservedLog> log_;
 };
 
@@ -527,6 +574,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
     if (out.writes_snapshots()) out.snapshot(sys.host(), t, step, loop);
     if (out.enabled()) out.log(sys.conserved(t, step, 0));
     if (out.logs_forces()) out.log_forces(boundary_force_lines<D>(scene, sys, body_first, t, step));
+    if (out.logs_regions()) out.log_regions(region_lines<D>(scene, sys, t, step));
   } else {
     sys.set_energy_books(start.books);
     sys.set_tool_state(start.tool_state);
@@ -685,6 +733,7 @@ FinalState run_loop(const Scene& scene, const RunOptions& opt, Stepper& sys, con
                             t >= t_end * (1 - 1e-12))) {
         out.log(sys.conserved(t, step, dt));
         if (out.logs_forces()) out.log_forces(boundary_force_lines<D>(scene, sys, body_first, t, step));
+        if (out.logs_regions()) out.log_regions(region_lines<D>(scene, sys, t, step));
       }
       if (output_time) {
         loop.next_output = std::min(loop.next_output + out_interval, t_end);

@@ -384,6 +384,9 @@ class SceneReader {
   void record_origins(const toml::table& t, const std::string& prefix, const std::string& library_file);
   BodyConfig read_body(const std::string& path, const toml::table& t, const std::vector<MaterialConfig>& mats);
   void read_rigid_tool(const std::string& p, const toml::table& t, BodyConfig& b) const;
+  Region read_region_shape(const std::string& p, const toml::table& t, const std::string& shape) const;
+  Region read_region_table(const std::string& p, const toml::table& t, std::vector<std::string> extra = {}) const;
+  MeasureRegionConfig read_measure_region(const std::string& p, const toml::table& t, const Scene& scene) const;
   void check_pressure_reachable(const std::string& p, const toml::table& t, const MaterialConfig& m, double rho,
                                 double pressure) const;
   void read_domain(const toml::table& t, DomainConfig& d);
@@ -1081,6 +1084,127 @@ void SceneReader::check_pressure_reachable(const std::string& p, const toml::tab
        t.get("pressure"));
 }
 
+// The shapes a region (a lattice body's shape, an entry of its `add` or
+// `subtract`, a [[regions]] entry) can take, and each one's keys.
+bool is_region_shape(const std::string& s) {
+  return s == "box" || s == "sphere" || s == "ring" || s == "polygon" || s == "cylinder";
+}
+std::vector<const char*> region_keys(const std::string& s) {
+  if (s == "box") return {"min", "max"};
+  if (s == "sphere") return {"center", "radius"};
+  if (s == "ring") return {"center", "radius", "inner_radius"};
+  if (s == "cylinder") return {"center", "radius", "length", "axis"};
+  if (s == "polygon") return {"vertices"};
+  return {};
+}
+
+// A region's geometric keys from table t at path p (core/region.hpp).
+Region SceneReader::read_region_shape(const std::string& p, const toml::table& t, const std::string& shape) const {
+  Region r;
+  if (shape == "box") {
+    r.shape = RegionShape::Box;
+    const auto lo = vector(t, "min", p);
+    if (!lo) fail(p + ".min", "missing required key (the box's lower corner, " + std::to_string(dim_) + " numbers [m])");
+    const auto hi = vector(t, "max", p);
+    if (!hi) fail(p + ".max", "missing required key (the box's upper corner, " + std::to_string(dim_) + " numbers [m])");
+    for (int a = 0; a < dim_; ++a)
+      if (!((*hi)[a] > (*lo)[a]))
+        fail(p + ".max",
+             "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
+             t.get("max"));
+    for (int a = 0; a < 3; ++a) {
+      r.min[a] = (*lo)[a];
+      r.max[a] = (*hi)[a];
+    }
+    return r;
+  }
+  if (shape == "polygon") {
+    if (dim_ != 2) fail(p + ".shape", "a polygon is a 2-D shape (use a box, sphere or cylinder in 3-D)", t.get("shape"));
+    r.shape = RegionShape::Polygon;
+    const toml::node* n = t.get("vertices");
+    if (!n) fail(p + ".vertices", "missing required key (the polygon's corners in order, [[x0, y0], [x1, y1], ...] [m])");
+    const toml::array* arr = n->as_array();
+    if (!arr || arr->size() < 3 || arr->size() > std::size_t(kMaxPolygonVertices))
+      fail(p + ".vertices", "expected an array of 3 to " + std::to_string(kMaxPolygonVertices) + " points [x, y]", n);
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::array* v = (*arr)[i].as_array();
+      const std::string key = p + ".vertices";
+      if (!v || v->size() != 2) fail(key, "entry " + std::to_string(i) + ": expected a point [x, y]", n);
+      for (int a = 0; a < 2; ++a) r.vertices[i][a] = as_number((*v)[std::size_t(a)], key, "point " + std::to_string(i) + " ");
+    }
+    r.vertex_count = int(arr->size());
+    double area2 = 0;  // twice the signed area (shoelace)
+    for (int i = 0, j = r.vertex_count - 1; i < r.vertex_count; j = i++)
+      area2 += r.vertices[j][0] * r.vertices[i][1] - r.vertices[i][0] * r.vertices[j][1];
+    if (!(std::fabs(area2) > 0)) fail(p + ".vertices", "the polygon encloses no area", n);
+    region_bounds<2>(r);
+    return r;
+  }
+  // round shapes
+  r.shape = shape == "sphere" ? RegionShape::Sphere : shape == "ring" ? RegionShape::Ring : RegionShape::Cylinder;
+  if (r.shape == RegionShape::Cylinder && dim_ != 3)
+    fail(p + ".shape", "a cylinder is a 3-D shape (in 2-D a box is its section)", t.get("shape"));
+  const auto c = vector(t, "center", p);
+  if (!c) fail(p + ".center", "missing required key (the centre, " + std::to_string(dim_) + " numbers [m])");
+  for (int a = 0; a < 3; ++a) r.center[a] = (*c)[a];
+  r.radius = required_number(t, "radius", p, "the outer radius [m], > 0");
+  require(r.radius > 0, t, "radius", p, r.radius, "> 0");
+  if (r.shape == RegionShape::Ring) {
+    r.inner_radius = required_number(t, "inner_radius", p, "the inner radius [m], >= 0 and < radius");
+    require(r.inner_radius >= 0 && r.inner_radius < r.radius, t, "inner_radius", p, r.inner_radius, ">= 0 and < radius");
+  }
+  if (r.shape == RegionShape::Cylinder) {
+    r.length = required_number(t, "length", p, "the cylinder's length along its axis [m], > 0");
+    require(r.length > 0, t, "length", p, r.length, "> 0");
+    if (auto ax = vector(t, "axis", p)) {
+      const double len = std::sqrt((*ax)[0] * (*ax)[0] + (*ax)[1] * (*ax)[1] + (*ax)[2] * (*ax)[2]);
+      if (!(len > 0)) fail(p + ".axis", "is the zero vector; give the cylinder's axis direction", t.get("axis"));
+      for (int a = 0; a < 3; ++a) r.axis[a] = (*ax)[a] / len;
+    }
+  }
+  if (dim_ == 3) region_bounds<3>(r);
+  else if (dim_ == 2) region_bounds<2>(r);
+  else region_bounds<1>(r);
+  return r;
+}
+
+// An inline shape table { shape = "...", ... } (add, subtract, [[regions]]).
+Region SceneReader::read_region_table(const std::string& p, const toml::table& t, std::vector<std::string> extra) const {
+  const auto shape = string(t, "shape", p);
+  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polygon, cylinder)");
+  if (!is_region_shape(*shape))
+    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polygon, cylinder", t.get("shape"));
+  extra.push_back("shape");
+  for (const char* k : region_keys(*shape)) extra.push_back(k);
+  check_keys(t, p, extra);
+  return read_region_shape(p, t, *shape);
+}
+
+// A [[regions]] entry: a name, a shape, and optionally the rigid tool it
+// follows (regions.csv, docs/user-guide.md).
+MeasureRegionConfig SceneReader::read_measure_region(const std::string& p, const toml::table& t, const Scene& scene) const {
+  MeasureRegionConfig m;
+  m.region = read_region_table(p, t, {"name", "follow"});
+  const auto name = string(t, "name", p);
+  if (!name) fail(p + ".name", "missing required key (the region's name in regions.csv, e.g. \"tray\")");
+  if (name->empty() || name->find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") !=
+                           std::string::npos)
+    fail(p + ".name", "'" + *name + "' must be letters, digits, '_' or '-' (it is a CSV field)", t.get("name"));
+  for (const MeasureRegionConfig& other : scene.regions)
+    if (other.name == *name) fail(p + ".name", "'" + *name + "' names an earlier region too", t.get("name"));
+  m.name = *name;
+  if (const toml::node* f = t.get("follow")) {
+    const auto* v = f->as_integer();
+    if (!v) fail(p + ".follow", "expected the index of a rigid-tool body (an integer), got " + type_name(*f), f);
+    const std::int64_t k = v->get();
+    if (k < 0 || std::size_t(k) >= scene.bodies.size() || !scene.bodies[std::size_t(k)].rigid_tool())
+      fail(p + ".follow", "is " + std::to_string(k) + ", not the index of a rigid tool (a body with boundary = \"driven\", "
+                          "or \"moving\" with an angular_velocity)", f);
+    m.follow = int(k);
+  }
+  return m;
+}
+
 // A rigid tool's keys (physics/rigid_body.hpp; docs/scene.md): after
 // `boundary` and the shape, so the default rotation centre is known.
 void SceneReader::read_rigid_tool(const std::string& p, const toml::table& t, BodyConfig& b) const {
@@ -1163,51 +1287,49 @@ BodyConfig SceneReader::read_body(const std::string& p, const toml::table& t,
   if (const toml::node* s = t.get("shape"); s && s->is_string() && s->as_string()->get() == "layered")
     return read_layered_body(p, t, mats);
   const auto shape = string(t, "shape", p);
-  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polytrope, layered)");
-  if (*shape != "box" && *shape != "sphere" && *shape != "ring")
-    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polytrope, layered", t.get("shape"));
-  b.shape = *shape == "sphere" ? BodyShape::Sphere : *shape == "ring" ? BodyShape::Ring : BodyShape::Box;
-  const bool round = b.shape != BodyShape::Box;
+  if (!shape) fail(p + ".shape", "missing required key (one of: box, sphere, ring, polygon, cylinder, polytrope, layered)");
+  if (!is_region_shape(*shape))
+    fail(p + ".shape", "unknown shape '" + *shape + "'; expected one of: box, sphere, ring, polygon, cylinder, polytrope, layered",
+         t.get("shape"));
   std::vector<std::string> known = {"shape", "material", "spacing", "lattice", "density", "pressure", "internal_energy",
                                     "velocity", "velocity_gradient", "boundary", "boundary_state", "wall_slip", "wall_friction",
                                     "wall_normal", "angular_velocity", "rotation_axis", "rotation_center", "applied_force",
-                                    "applied_torque", "driven_axes", "driven_rotation", "tool_mass", "tool_inertia"};
-  if (round) known.insert(known.end(), {"center", "radius"});
-  else known.insert(known.end(), {"min", "max"});
-  if (b.shape == BodyShape::Ring) known.push_back("inner_radius");
+                                    "applied_torque", "driven_axes", "driven_rotation", "tool_mass", "tool_inertia", "add",
+                                    "subtract"};
+  for (const char* k : region_keys(*shape)) known.push_back(k);
   check_keys(t, p, known);
 
   b.material_id = material_index(t, p, mats);
   b.material = mats[std::size_t(b.material_id)].name;
 
-  if (round) {
-    // sphere (a disk in 2-D) or ring (annulus in 2-D, shell in 3-D)
-    const auto c = vector(t, "center", p);
-    if (!c) fail(p + ".center", "missing required key (the centre, " + std::to_string(dim_) + " numbers [m])");
-    b.center = *c;
-    b.radius = required_number(t, "radius", p, "the outer radius [m], > 0");
-    require(b.radius > 0, t, "radius", p, b.radius, "> 0");
-    if (b.shape == BodyShape::Ring) {
-      b.inner_radius = required_number(t, "inner_radius", p, "the inner radius [m], >= 0 and < radius");
-      require(b.inner_radius >= 0 && b.inner_radius < b.radius, t, "inner_radius", p, b.inner_radius,
-              ">= 0 and < radius");
+  b.region = read_region_shape(p, t, *shape);
+  b.shape = *shape == "sphere"     ? BodyShape::Sphere
+            : *shape == "ring"     ? BodyShape::Ring
+            : *shape == "polygon"  ? BodyShape::Polygon
+            : *shape == "cylinder" ? BodyShape::Cylinder
+                                   : BodyShape::Box;
+  for (int a = 0; a < 3; ++a) {
+    b.min[a] = a < dim_ ? b.region.min[a] : 0;
+    b.max[a] = a < dim_ ? b.region.max[a] : 0;
+    b.center[a] = b.region.center[a];
+  }
+  b.radius = b.region.radius;
+  b.inner_radius = b.region.inner_radius;
+  // Composed shapes: one lattice over the shape, the regions added, less the
+  // regions cut out (a bed with a tool's place left empty, a container).
+  for (const char* list : {"add", "subtract"}) {
+    const toml::node* n = t.get(list);
+    if (!n) continue;
+    const toml::array* arr = n->as_array();
+    if (!arr || arr->empty())
+      fail(p + "." + list, std::string("expected a non-empty array of shape tables, e.g. ") + list +
+                               " = [{ shape = \"box\", min = [...], max = [...] }]", n);
+    for (std::size_t k = 0; k < arr->size(); ++k) {
+      const std::string q = p + "." + list + "[" + std::to_string(k) + "]";
+      const toml::table* e = (*arr)[k].as_table();
+      if (!e) fail(q, "expected a table { shape = ..., ... }", &(*arr)[k]);
+      (std::string(list) == "add" ? b.add : b.subtract).push_back(read_region_table(q, *e));
     }
-    for (int a = 0; a < 3; ++a) {
-      b.min[a] = a < dim_ ? b.center[a] - b.radius : 0;
-      b.max[a] = a < dim_ ? b.center[a] + b.radius : 0;
-    }
-  } else {
-    const auto lo = vector(t, "min", p);
-    if (!lo) fail(p + ".min", "missing required key (the box's lower corner, " + std::to_string(dim_) + " numbers [m])");
-    const auto hi = vector(t, "max", p);
-    if (!hi) fail(p + ".max", "missing required key (the box's upper corner, " + std::to_string(dim_) + " numbers [m])");
-    for (int a = 0; a < dim_; ++a)
-      if (!((*hi)[a] > (*lo)[a]))
-        fail(p + ".max",
-             "entry " + std::to_string(a) + " is " + fmt((*hi)[a]) + ", must be > min (" + fmt((*lo)[a]) + ")",
-             t.get("max"));
-    b.min = *lo;
-    b.max = *hi;
   }
 
   b.spacing = required_number(t, "spacing", p, "the lattice spacing [m], > 0");
@@ -1648,7 +1770,8 @@ void SceneReader::read_collision(const toml::table& t, Scene& scene) {
 Scene SceneReader::read(const toml::table& root) {
   Scene scene;
   scene.file = file_;
-  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits", "collision"});
+  check_keys(root, "", {"simulation", "materials", "bodies", "domain", "output", "gravity", "energy_deposits", "collision",
+                        "regions"});
   read_simulation(root, scene.simulation);
   if (const toml::table* g = table(root, "gravity", "")) read_gravity(*g, scene.gravity);
   G_ = scene.gravity.G;
@@ -1696,6 +1819,19 @@ Scene SceneReader::read(const toml::table& root) {
       if (!t) fail(p, "expected a table, got " + type_name((*arr)[i]), &(*arr)[i]);
       scene.energy_deposits.push_back(read_energy_deposit(p, *t));
     }
+  }
+  if (const toml::node* regions = root.get("regions")) {
+    const toml::array* arr = regions->as_array();
+    if (!arr) fail("regions", "expected an array of tables: write [[regions]]", regions);
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string p = "regions[" + std::to_string(i) + "]";
+      const toml::table* t = (*arr)[i].as_table();
+      if (!t) fail(p, "expected a table, got " + type_name((*arr)[i]), &(*arr)[i]);
+      scene.regions.push_back(read_measure_region(p, *t, scene));
+    }
+    if (scene.materials.size() > std::size_t(kMaxRegionMaterials))
+      fail("regions", "measuring regions count at most " + std::to_string(kMaxRegionMaterials) + " materials; the scene has " +
+                          std::to_string(scene.materials.size()), regions);
   }
   if (const toml::table* c = table(root, "collision", "")) read_collision(*c, scene);
   // A [collision] relaxes its bodies in their own frames, held in place, and

@@ -1051,6 +1051,11 @@ void CudaStepper<D>::set_tool_state(const std::vector<double>& list) {
 }
 
 template <int D>
+RegionSums CudaStepper<D>::region_sums(const Region& r, int tool) {
+  return impl_->steps.region_sums(r, tool);
+}
+
+template <int D>
 ForceSums<D> CudaStepper<D>::held_force(std::int32_t lo, std::int32_t hi, Vec<D> point) {
   return impl_->steps.held_force(lo, hi, point);
 }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "rubble/core/box.hpp"
+#include "rubble/core/region.hpp"
 #include "rubble/integrate/rk2_adaptive.hpp"
 #include "rubble/io/conserved_log.hpp"
 #include "rubble/io/conserved_sums.hpp"
@@ -52,6 +53,8 @@ class CudaStepper {
   std::vector<double> tool_state() const;
   void set_tool_state(const std::vector<double>& list);
   ForceSums<D> held_force(std::int32_t lo, std::int32_t hi, Vec<D> point);
+  // The free mass by material inside a measuring region ([[regions]]).
+  RegionSums region_sums(const Region& r, int tool);
   std::size_t first_non_finite();
   ConservedRecord conserved(double t, std::int64_t step, double dt);
   // The energy bookkeeping (StepSequence): books, watchdog retries.

@@ -141,6 +141,8 @@ class CpuStepper {
   std::vector<double> tool_state() const { return steps_.tool_state(); }
   void set_tool_state(const std::vector<double>& list) { steps_.set_tool_state(list); }
   ForceSums<D> held_force(std::int32_t lo, std::int32_t hi, Vec<D> point) { return steps_.held_force(lo, hi, point); }
+  // The free mass by material inside a measuring region ([[regions]]).
+  RegionSums region_sums(const Region& r, int tool) { return steps_.region_sums(r, tool); }
   // Index of the first particle with a non-finite state, or n.
   std::size_t first_non_finite() { return steps_.check_state().first_bad; }
   ConservedRecord conserved(double t, std::int64_t step, double dt) const {

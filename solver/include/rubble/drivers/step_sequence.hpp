@@ -304,9 +304,10 @@ class StepSequence {
     RigidState<D> y0, y2, half; // the step's start, RK2's second stage, leapfrog's half step
     RigidRates<D> k0, k2;
     ForceSums<D> reaction;      // the last evaluation's force and torque (about c) on it
+    Vec<D> c0;                  // c at t = 0 (a region that follows the tool is given there)
   };
   const std::vector<Tool>& tools() const { return tools_; }
-  // Every tool's state as a list (c, theta, V, omega per tool: what a
+  // Every tool's state as a list (kRigidStateValues per tool: what a
   // restart snapshot keeps), and a resumed run's from its snapshot.
   std::vector<double> tool_state() const {
     std::vector<double> out;
@@ -315,19 +316,22 @@ class StepSequence {
       out.push_back(double(t.y.theta));
       for (int a = 0; a < D; ++a) out.push_back(double(t.y.V[a]));
       out.push_back(double(t.y.omega));
+      for (int a = 0; a < D; ++a) out.push_back(double(t.c0[a]));
     }
     return out;
   }
   void set_tool_state(const std::vector<double>& list) {
-    if (list.size() != tools_.size() * std::size_t(2 * D + 2))
+    const std::size_t need = tools_.size() * std::size_t(kRigidStateValues<D>);
+    if (list.size() != need)
       throw RunError("the restart snapshot holds " + std::to_string(list.size()) + " rigid-tool values, the scene's " +
-                     std::to_string(tools_.size()) + " tools need " + std::to_string(tools_.size() * (2 * D + 2)));
+                     std::to_string(tools_.size()) + " tools need " + std::to_string(need));
     std::size_t j = 0;
     for (Tool& t : tools_) {
       for (int a = 0; a < D; ++a) t.y.c[a] = Real(list[j++]);
       t.y.theta = Real(list[j++]);
       for (int a = 0; a < D; ++a) t.y.V[a] = Real(list[j++]);
       t.y.omega = Real(list[j++]);
+      for (int a = 0; a < D; ++a) t.c0[a] = Real(list[j++]);
     }
     if (tools_.empty()) return;
     place_tools();
@@ -368,6 +372,7 @@ class StepSequence {
         tool.y.V[a] = Real(tool.spec.velocity[a]);
       }
       tool.y.omega = Real(tool.spec.angular_velocity);
+      tool.c0 = tool.y.c;  // (a resumed run takes it from its snapshot)
       tools_.push_back(tool);
     }
   }
@@ -470,6 +475,36 @@ class StepSequence {
       t.y = t.y0;
       t.k = t.k0;
     }
+  }
+
+  // The free particles' mass by material inside region r ([[regions]]);
+  // with tool >= 0 the region follows that tool: it is given at the tool's
+  // pose at t = 0, and a particle at x is tested at c0 + R^T (x - c).
+  RegionSums region_sums(const Region& r, int tool) {
+    const bool follow = tool >= 0 && std::size_t(tool) < tools_.size();
+    RigidPose<D> pose{};
+    Vec<D> c0 = Vec<D>::zero();
+    if (follow) {
+      pose = poses().pose[tool];
+      c0 = tools_[std::size_t(tool)].c0;
+    }
+    const StoreView<D> s = view();
+    const Region reg = r;
+    return be_.reduce(
+        size(),
+        [=] RUBBLE_LAMBDA(std::uint32_t i) {
+          RegionSums out;
+          if (s.boundary && s.boundary[i] != kFreeParticle) return out;
+          const Vec<D> x = follow ? c0 + transpose(pose.R) * (s.x[i] - pose.c) : s.x[i];
+          double p[3] = {0, 0, 0};
+          for (int k = 0; k < D; ++k) p[k] = double(x[k]);
+          if (!reg.contains<D>(p)) return out;
+          const int m = s.material_id[i];
+          if (m >= 0 && m < kMaxRegionMaterials) out.mass[m] = double(s.m[i]);
+          out.count = 1;
+          return out;
+        },
+        RegionSums{}, RegionSumOp{});
   }
 
   // The force and torque (about `point`) of the rest on the held particles

@@ -72,6 +72,7 @@ struct CsvLine {
   std::string text;
   void put(double v);
   void put(std::int64_t v);
+  void put(const std::string& v);  // a field without commas or quotes (names)
 };
 
 class ConservedLog : public CsvLog {

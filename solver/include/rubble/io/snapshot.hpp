@@ -42,8 +42,8 @@ struct RestartState {
   std::vector<LibraryText> libraries;  // library material files, as read
   std::vector<std::int64_t> body_first_id;  // body k holds ids [first[k], first[k+1])
   EnergyBooks books;        // the energy bookkeeping so far (conserved.csv's booked columns)
-  // rigid tools (physics/rigid_body.hpp): per tool c (D values), theta, V
-  // (D), omega; empty without tools
+  // rigid tools (physics/rigid_body.hpp): kRigidStateValues per tool;
+  // empty without tools
   std::vector<double> tool_state;
 };
 

@@ -129,6 +129,11 @@ RUBBLE_HD_INLINE void place_rigid_particle(const RigidPose<D>& p, const Vec<D>& 
   v = p.V + turning_velocity<D>(p.n, p.omega, r);
 }
 
+// A tool's state as a restart snapshot and boundary_forces.csv list it:
+// c (D values), theta, V (D), omega, then c0, its reference point at t = 0 (D).
+template <int D>
+inline constexpr int kRigidStateValues = 3 * D + 2;
+
 // The state of a tool that the integrators advance, and its rates.
 template <int D>
 struct RigidState {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rubble/core/real.hpp"
+#include "rubble/core/region.hpp"
 #include "rubble/physics/damage.hpp"
 #include "rubble/physics/eos/eos.hpp"
 #include "rubble/physics/gravity.hpp"
@@ -177,7 +178,9 @@ struct MaterialConfig {
 // Ring (2-D annulus, 3-D spherical shell): center, inner_radius..radius.
 // Layered: a differentiated 3-D body in hydrostatic equilibrium, particles
 // on nested shells (scene/layered_body.hpp).
-enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3, Layered = 4 };
+// Polygon (2-D): the closed polygon through `vertices`. Cylinder (3-D):
+// center (the axis' midpoint), radius, length, axis (core/region.hpp).
+enum class BodyShape : int { Box = 0, Polytrope = 1, Sphere = 2, Ring = 3, Layered = 4, Polygon = 5, Cylinder = 6 };
 enum class Lattice : int { Cubic = 0, HexagonalClosePacked = 1 };
 // Boundary particles (walls, clamps, tools): not integrated, but neighbours
 // of the others with their own state. Fixed: at rest; moving: with the
@@ -276,6 +279,22 @@ struct BodyConfig {
   // radius) and material/material_id (the outermost layer's).
   std::vector<LayerConfig> layers;
   std::uint64_t seed = 1;          // the shells' random rotations (layered)
+  // Lattice bodies (box, sphere, ring, polygon, cylinder): the shape as a
+  // region (core/region.hpp), and the regions added to it and cut out of
+  // it (scene keys `add`, `subtract`): one lattice fills
+  // (region + add) - subtract.
+  Region region;
+  std::vector<Region> add, subtract;
+};
+
+// [[regions]]: a named measuring region (issue #54 item 3): the mass of
+// each material inside it is written to regions.csv. `follow`: the index
+// of a rigid-tool body whose motion it follows (its shape is given at the
+// tool's position at t = 0), or -1.
+struct MeasureRegionConfig {
+  std::string name;
+  Region region;
+  int follow = -1;
 };
 
 struct DomainConfig {
@@ -356,6 +375,7 @@ struct Scene {
   SimulationConfig simulation;
   std::vector<MaterialConfig> materials;
   std::vector<BodyConfig> bodies;
+  std::vector<MeasureRegionConfig> regions;  // [[regions]] (none: empty)
   DomainConfig domain;
   OutputConfig output;
   GravityConfig gravity;
