@@ -1,7 +1,7 @@
 #pragma once
-// Reading a run's conserved.csv (solver/include/rubble/io/conserved_log.hpp
-// writes it) back in a rung: the time, energy, momentum and angular
-// momentum columns, found by name.
+// Reading a run's CSV files back in a rung: any column by name, and
+// conserved.csv's (solver/include/rubble/io/conserved_log.hpp writes it)
+// time, energy, momentum and angular momentum columns.
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -16,6 +16,31 @@ struct ConservedRow {
   double momentum[3];  // the components the run's dimension has; 0 for the others
   double angular_momentum[3];  // likewise (2-D: z only; 1-D: none)
 };
+
+// Column `name` of any CSV file a run writes (conserved.csv,
+// boundary_forces.csv, regions.csv), as numbers, one per row.
+inline std::vector<double> read_csv_column(const std::string& path, const std::string& name) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot read " + path);
+  std::string line;
+  std::getline(f, line);
+  std::vector<std::string> cols;
+  {
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
+  }
+  const auto it = std::find(cols.begin(), cols.end(), name);
+  if (it == cols.end()) throw std::runtime_error(path + ": no column " + name);
+  const std::size_t col = std::size_t(it - cols.begin());
+  std::vector<double> out;
+  while (std::getline(f, line)) {
+    std::stringstream ss(line);
+    std::string c;
+    for (std::size_t k = 0; k <= col && std::getline(ss, c, ','); ++k)
+      if (k == col) out.push_back(std::stod(c));
+  }
+  return out;
+}
 
 inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
   std::ifstream f(path);

@@ -235,13 +235,16 @@ class StepSequence {
       dt = std::max(r.dt_taken / Real(4), dt_min);
     }
   }
-  // Relaxation: every velocity times f (energy leaves on purpose: the
-  // watchdog measures its start again).
+  // Relaxation: every free particle's velocity times f (energy leaves on
+  // purpose: the watchdog measures its start again). Boundary particles keep
+  // their prescribed motion (a moving wall damped once would crawl for ever).
   void damp(Real f) {
     dt_known_ = false;
     energy_known_ = false;
     const StoreView<D> s = view();
-    be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) { s.v[i] *= f; });
+    be_.for_each("damping", size(), [=] RUBBLE_LAMBDA(std::uint32_t i) {
+      if (!(s.boundary && s.boundary[i] != kFreeParticle)) s.v[i] *= f;
+    });
     if (on_.rigid_tools) {  // a driven tool is damped as a whole; a prescribed one keeps its motion
       for (Tool& t : tools_)
         if (t.spec.driven) {
