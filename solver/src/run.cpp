@@ -844,6 +844,13 @@ FinalState run_dimension(const Scene& scene, const RunOptions& opt) {
     if (scene.collision.enabled && !opt.quiet) std::fprintf(stderr, "rubble: %s\n", collision_report(collision).c_str());
     for (const std::string& w : check_overlap<D>(scene, ps, body_first, domain_from_scene<D>(scene), hfact))
       std::fprintf(stderr, "rubble: warning: %s\n", w.c_str());
+    if (!opt.quiet)
+      for (const MaterialConfig& m : scene.materials)
+        if (m.stiffness_scale < 1)
+          std::fprintf(stderr,
+                       "rubble: simulation.quasi_static_sound_speed: materials.%s softened, K0 and G times %.4g "
+                       "(K0 = %.4g Pa, G = %.4g Pa)\n",
+                       m.name.c_str(), m.stiffness_scale, double(m.murnaghan.K0), m.shear_modulus);
     if (!opt.quiet && opt.write_output) {
       const std::size_t per = bytes_per_particle<D>(scene, needs, hfact);
       std::fprintf(stderr, "rubble: %zu particles, about %s of memory (%zu bytes each)\n", ps.n,

@@ -426,7 +426,7 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (!t) fail(p, "missing required table [simulation] (it needs at least dimension and end_time)");
   check_keys(*t, p,
              {"dimension", "end_time", "integrator", "kernel", "density", "hfact", "courant", "force_factor",
-              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end", "damping_frame", "pressure_force",
+              "h_tolerance", "rk2_tolerance", "energy_step_tolerance", "density_step_fraction", "quasi_static_sound_speed", "dt_initial", "dt_min", "max_steps", "damping_time", "damping_end", "damping_frame", "pressure_force",
               "kernel_correction", "stress_update", "xsph", "shifting", "gravity", "allow_overlap"});
 
   const auto dim = integer(*t, "dimension", p);
@@ -470,6 +470,10 @@ void SceneReader::read_simulation(const toml::table& root, SimulationConfig& s) 
   if (auto x = number(*t, "energy_step_tolerance", p)) {
     require(*x >= 0 && *x <= 1, *t, "energy_step_tolerance", p, *x, "in [0, 1] (0 = off; default courant^2)");
     s.energy_step_tolerance = *x;
+  }
+  if (auto x = number(*t, "quasi_static_sound_speed", p)) {
+    require(*x > 0, *t, "quasi_static_sound_speed", p, *x, "> 0 [m/s] (leave it out for the materials as given)");
+    s.quasi_static_sound_speed = *x;
   }
   if (auto x = number(*t, "density_step_fraction", p)) {
     require(*x >= 0 && *x <= 1, *t, "density_step_fraction", p, *x, "in [0, 1] (0 = no limit; default 0.1)");
@@ -1794,6 +1798,27 @@ Scene SceneReader::read(const toml::table& root) {
     const std::string name(k->str());
     if (!n->is_table()) fail("materials." + name, "expected a table ([materials." + name + "]), got " + type_name(*n), n);
     scene.materials.push_back(read_material(name, *n->as_table()));
+  }
+
+  // Quasi-static runs: every Murnaghan solid softened to the longitudinal
+  // wave speed c_q = simulation.quasi_static_sound_speed (at rho0), its K0
+  // and G scaled by (c_q / c_l)^2 < 1; a solid of another EOS, or porous,
+  // is refused (its softening is not one factor).
+  if (const double cq = scene.simulation.quasi_static_sound_speed; cq > 0) {
+    const toml::table* st = table(root, "simulation", "");
+    for (MaterialConfig& m : scene.materials) {
+      if (!(m.shear_modulus > 0)) continue;
+      if (m.eos != EosKind::Murnaghan || m.porosity.enabled)
+        fail("simulation.quasi_static_sound_speed",
+             "softens Murnaghan solids only; materials." + m.name + " is " +
+                 (m.porosity.enabled ? std::string("porous") : std::string("not Murnaghan")),
+             st ? st->get("quasi_static_sound_speed") : nullptr);
+      const double cl = std::sqrt((m.murnaghan.K0 + 4.0 / 3.0 * m.shear_modulus) / m.murnaghan.rho0);
+      if (cl <= cq) continue;
+      m.stiffness_scale = (cq / cl) * (cq / cl);
+      m.murnaghan.K0 *= m.stiffness_scale;
+      m.shear_modulus *= m.stiffness_scale;
+    }
   }
 
   // Bodies: an array of tables ([[bodies]]).

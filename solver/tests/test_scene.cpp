@@ -398,3 +398,36 @@ TEST(Scene, SetOverrideValueIsValidated) {
 }
 
 }  // namespace
+
+// simulation.quasi_static_sound_speed (issue #54 item 5): a Murnaghan solid
+// softened to the given longitudinal wave speed, K0 and G by one factor; a
+// solid already slower, and fluids, untouched; porous solids refused.
+TEST(Scene, QuasiStaticSoundSpeedSoftensMurnaghanSolids) {
+  const std::string head = "[simulation]\ndimension = 2\nend_time = 1.0\nquasi_static_sound_speed = 20.0\n";
+  const std::string soil = "[materials.soil]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1800.0, K0 = 2.0e7, n = 1.0 }\n"
+                           "shear_modulus = 9.2e6\n";
+  const std::string soft = "[materials.soft]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1800.0, K0 = 1.0e5, n = 1.0 }\n"
+                           "shear_modulus = 1.0e5\n";
+  const std::string water = "[materials.water]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1000.0, K0 = 2.0e7, n = 7.0 }\n";
+  const std::string body = "[[bodies]]\nshape = \"box\"\nmaterial = \"soil\"\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n"
+                           "spacing = 0.1\ndensity = 1800.0\ninternal_energy = 0.0\n";
+  const rubble::Scene s = parse_scene(head + soil + soft + water + body, "q.toml");
+  const double cl = std::sqrt((2.0e7 + 4.0 / 3.0 * 9.2e6) / 1800.0), f = (20.0 / cl) * (20.0 / cl);
+  EXPECT_NEAR(s.materials[0].stiffness_scale, f, 1e-15);
+  EXPECT_NEAR(s.materials[0].murnaghan.K0, 2.0e7 * f, 1e-6);
+  EXPECT_NEAR(s.materials[0].shear_modulus, 9.2e6 * f, 1e-6);
+  const double c_new = std::sqrt((double(s.materials[0].murnaghan.K0) + 4.0 / 3.0 * s.materials[0].shear_modulus) / 1800.0);
+  EXPECT_NEAR(c_new, 20.0, 1e-9);
+  EXPECT_EQ(s.materials[1].stiffness_scale, 1.0);  // c_l = 10 m/s already: never stiffened
+  EXPECT_EQ(s.materials[2].stiffness_scale, 1.0);  // a fluid keeps its sound speed
+  EXPECT_EQ(double(s.materials[2].murnaghan.K0), 2.0e7);
+  const std::string porous = "[materials.soil]\neos = \"murnaghan\"\nmurnaghan = { rho0 = 1800.0, K0 = 2.0e7, n = 1.0 }\n"
+                             "shear_modulus = 9.2e6\nporosity = { model = \"p_alpha\", alpha0 = 1.275, p_e = 8e7, p_s = 7e8, "
+                             "c_e = 4110.0, c_s0 = 5350.0 }\n";
+  try {
+    parse_scene(head + porous + body, "q.toml");
+    FAIL() << "a porous solid was softened";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.quasi_static_sound_speed"), std::string::npos) << e.what();
+  }
+}

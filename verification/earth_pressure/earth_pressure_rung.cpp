@@ -16,9 +16,14 @@
 //   - |F / F_R - 1| <= 10 % at every resolution (issue #54 item 4a);
 //   - recorded: the plateau's scatter, the observed order of the change of
 //     F between resolutions.
+// With --quasi-static C each resolution runs again with
+// simulation.quasi_static_sound_speed = C (issue #54 item 5): the softened
+// run's force within 2 % of the run as given, in at least 5 times fewer
+// steps.
 //
 //   earth_pressure_rung --scene FILE --resolutions 10,14,20 --records DIR --out DIR
-//                       --label NAME [--set key=value ...] [--plateau-from 0.5] [--checks]
+//                       --label NAME [--set key=value ...] [--plateau-from 0.5]
+//                       [--quasi-static C] [--checks]
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -38,12 +43,15 @@ namespace {
 
 struct Args : rubble::verification::RungArgs {
   double plateau_from = 0.5;
+  double quasi_static = 0;  // --quasi-static C: each resolution also run softened to C m/s
   Args()
       : RungArgs({.taken = "--scene --resolutions --records --out --label --set --checks --known-failure --report-only",
                   .out = "earth_pressure_out",
                   .label = "c0",
                   .required = "--scene --resolutions"}) {}
-  bool own_option(rubble::verification::ArgReader& r) override { return r.value("--plateau-from", plateau_from); }
+  bool own_option(rubble::verification::ArgReader& r) override {
+    return r.value("--plateau-from", plateau_from) || r.value("--quasi-static", quasi_static);
+  }
   void validate() override {
     for (double n : resolutions)
       if (!(n >= 4)) throw std::runtime_error("--resolutions are particles per depth, each >= 4");
@@ -54,8 +62,47 @@ struct Args : rubble::verification::RungArgs {
 struct Result {
   double n = 0, force = 0, scatter = 0, wall_seconds = 0;
   std::size_t particles = 0;
+  long long steps = 0;
   std::vector<double> t, f;  // the force over time
 };
+
+// One run at n particles per depth (the scene with `sets`): the mean force
+// on the pushed wall over the plateau.
+Result run_one(const Args& args, const rubble::Scene& base, int pushed, double d, double n,
+               std::vector<std::string> sets, const std::string& tag) {
+  for (std::size_t k = 0; k < base.bodies.size(); ++k)
+    sets.push_back("bodies." + std::to_string(k) + ".spacing=" + rubble::verification::exact_number(d / n));
+  const rubble::Scene scene = rubble::load_scene_file(args.scene, sets);
+  const std::filesystem::path out = std::filesystem::path(args.out) / (tag + std::to_string(int(n)));
+  const rubble::FinalState fs = rubble::verification::run_into(scene, out);
+  const std::string csv = (out / "boundary_forces.csv").string();
+  using rubble::verification::read_csv_column;
+  const std::vector<double> body = read_csv_column(csv, "body"), t = read_csv_column(csv, "time"),
+                            fx = read_csv_column(csv, "force_x");
+  Result r;
+  r.n = n;
+  r.particles = fs.m.size();
+  r.wall_seconds = fs.wall_seconds;
+  r.steps = static_cast<long long>(fs.steps);
+  double sum = 0, sum2 = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < body.size(); ++i) {
+    if (int(body[i]) != pushed) continue;
+    const double F = -fx[i];  // the soil pushes the wall back (-x)
+    if (r.t.empty() || t[i] >= r.t.back() + 0.002) {
+      r.t.push_back(t[i]);
+      r.f.push_back(F);
+    }
+    if (t[i] < args.plateau_from) continue;
+    sum += F;
+    sum2 += F * F;
+    ++count;
+  }
+  if (count < 10) throw std::runtime_error("fewer than 10 rows of boundary_forces.csv in the plateau");
+  r.force = sum / count;
+  r.scatter = std::sqrt(std::max(0.0, sum2 / count - r.force * r.force));
+  return r;
+}
 
 int run(const Args& args) {
   const rubble::Scene base = rubble::load_scene_file(args.scene, args.sets);
@@ -77,42 +124,21 @@ int run(const Args& args) {
   std::printf("earth pressure (%s): phi = %.1f deg, c = %g Pa, psi = %.1f deg, d = %g m, K_p = %.4f, F_R = %.2f N/m\n",
               args.label.c_str(), mat.plasticity.friction_angle, c, mat.plasticity.dilatancy_angle, d, Kp, F_R);
 
-  std::vector<Result> results;
+  std::vector<Result> results, softened;
   for (double n : args.resolutions) {
-    std::vector<std::string> sets = args.sets;
-    for (std::size_t k = 0; k < base.bodies.size(); ++k)
-      sets.push_back("bodies." + std::to_string(k) + ".spacing=" + rubble::verification::exact_number(d / n));
-    const rubble::Scene scene = rubble::load_scene_file(args.scene, sets);
-    const std::filesystem::path out = std::filesystem::path(args.out) / ("n" + std::to_string(int(n)));
-    const rubble::FinalState fs = rubble::verification::run_into(scene, out);
-    const std::string csv = (out / "boundary_forces.csv").string();
-    using rubble::verification::read_csv_column;
-    const std::vector<double> body = read_csv_column(csv, "body"), t = read_csv_column(csv, "time"),
-                              fx = read_csv_column(csv, "force_x");
-    Result r;
-    r.n = n;
-    r.particles = fs.m.size();
-    r.wall_seconds = fs.wall_seconds;
-    double sum = 0, sum2 = 0;
-    int count = 0;
-    for (std::size_t i = 0; i < body.size(); ++i) {
-      if (int(body[i]) != pushed) continue;
-      const double F = -fx[i];  // the soil pushes the wall back (-x)
-      if (r.t.empty() || t[i] >= r.t.back() + 0.002) {
-        r.t.push_back(t[i]);
-        r.f.push_back(F);
-      }
-      if (t[i] < args.plateau_from) continue;
-      sum += F;
-      sum2 += F * F;
-      ++count;
-    }
-    if (count < 10) throw std::runtime_error("fewer than 10 rows of boundary_forces.csv in the plateau");
-    r.force = sum / count;
-    r.scatter = std::sqrt(std::max(0.0, sum2 / count - r.force * r.force));
-    std::printf("  %3.0f per depth: N = %zu, F = %.2f N/m (scatter %.2f), F/F_R - 1 = %+.4f, wall %.1f s\n", n,
-                r.particles, r.force, r.scatter, r.force / F_R - 1, r.wall_seconds);
+    const Result r = run_one(args, base, pushed, d, n, args.sets, "n");
+    std::printf("  %3.0f per depth: N = %zu, F = %.2f N/m (scatter %.2f), F/F_R - 1 = %+.4f, %lld steps, wall %.1f s\n", n,
+                r.particles, r.force, r.scatter, r.force / F_R - 1, r.steps, r.wall_seconds);
     results.push_back(r);
+    if (args.quasi_static > 0) {
+      std::vector<std::string> sets = args.sets;
+      sets.push_back("simulation.quasi_static_sound_speed=" + rubble::verification::exact_number(args.quasi_static));
+      const Result q = run_one(args, base, pushed, d, n, sets, "q");
+      std::printf("      softened to %g m/s: F = %.2f N/m (scatter %.2f), F/F - 1 = %+.4f, %lld steps (%.1f x fewer), wall %.1f s\n",
+                  args.quasi_static, q.force, q.scatter, q.force / r.force - 1, q.steps, double(r.steps) / double(q.steps),
+                  q.wall_seconds);
+      softened.push_back(q);
+    }
   }
 
   std::vector<Check> checks;
@@ -123,6 +149,17 @@ int run(const Args& args) {
     forces.push_back(r.force);
     checks.push_back({"|F/F_R - 1| at " + std::to_string(int(r.n)) + " particles per depth", std::fabs(r.force / F_R - 1),
                       0.10, "<=", "issue #54 item 4a: within 10 % of Rankine's passive force"});
+  }
+  std::vector<double> soft_forces, step_ratios;
+  for (std::size_t k = 0; k < softened.size(); ++k) {
+    const Result &r = results[k], &q = softened[k];
+    soft_forces.push_back(q.force);
+    step_ratios.push_back(double(r.steps) / double(q.steps));
+    const std::string at = " at " + std::to_string(int(r.n)) + " particles per depth";
+    checks.push_back({"|F_softened/F - 1|" + at, std::fabs(q.force / r.force - 1), 0.02, "<=",
+                      "issue #54 item 5: the same answer within 2 %"});
+    checks.push_back({"steps / steps_softened" + at, double(r.steps) / double(q.steps), 5.0, ">=",
+                      "issue #54 item 5: at least 5 times fewer steps"});
   }
   for (std::size_t k = 1; k < results.size(); ++k) changes.push_back(std::fabs(forces[k] - forces[k - 1]) / F_R);
   double order = NAN;
@@ -155,6 +192,9 @@ int run(const Args& args) {
               {"reference", Json::object({{"F_R", F_R}, {"source", "Rankine passive pressure, UFC 3-220-20 eqs. 4-4, 4-7"}})},
               {"resolutions", ns},
               {"forces", forces},
+              {"quasi_static_sound_speed", args.quasi_static},
+              {"softened_forces", soft_forces},
+              {"step_ratios", step_ratios},
               {"errors", Json::object({{"F", Json::object({{"rel", errors}})}})},
               {"observed_order_of_change", std::isfinite(order) ? Json(order) : Json()},
               {"series", Json::array(series)},

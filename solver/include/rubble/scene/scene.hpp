@@ -55,6 +55,10 @@ struct SimulationConfig {
   // Continuity density: the largest fraction of its density a particle may
   // change in one step (issue #50 item 3); 0 = no such limit.
   double density_step_fraction = 0.1;
+  // Quasi-static runs (issue #54 item 5): the longitudinal wave speed every
+  // Murnaghan solid is softened to (its K0 and G scaled by one factor, never
+  // stiffened); 0 = off. docs/scene.md gives the criterion.
+  double quasi_static_sound_speed = 0;  // [m/s]
   std::int64_t max_steps = 10000000;
   // Velocity damping for relaxing initial conditions: while t < damping_end,
   // every step multiplies v by exp(-dt / damping_time). 0 = off.
@@ -166,6 +170,9 @@ struct MaterialConfig {
   double shear_modulus = 0;  // [Pa] mu; > 0 makes the material an elastic solid
   ArtificialStressConfig artificial_stress;
   double stress_diffusion = 0;  // zeta of the deviatoric stress diffusion (solids; 0 = off)
+  // simulation.quasi_static_sound_speed: the factor its K0 and G were
+  // scaled by (1: as given)
+  double stiffness_scale = 1;
   // p-alpha porosity (Jutzi, Benz & Michel 2008; Jutzi et al. 2009), the
   // model's own parameters (physics/porosity.hpp); Murnaghan and Tillotson
   // matrices only; porosity = { model = "p_alpha", ... }, docs/scene.md.
