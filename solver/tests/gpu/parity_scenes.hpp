@@ -111,6 +111,19 @@ inline Scene embryo_collision(int steps) {
   return load_scene_file(src("examples/embryo_collision/embryo_collision.toml"), sets);
 }
 
+// A driven rigid tool (physics/rigid_body.hpp) pressed into clay by a load
+// while it turns freely (verification/soil_forces/bearing_capacity.toml at
+// 8 particles per footing width): its placement at every stage, its
+// reaction from the wall forces and its rates on both backends. dt = 1e-4 s
+// is a third of the Courant limit there.
+inline Scene soil_tool(int steps) {
+  auto sets = steps_of(1e-4, steps);
+  sets.insert(sets.end(), {"bodies.0.spacing=0.0125", "bodies.1.spacing=0.0125", "bodies.2.spacing=0.0125",
+                           "bodies.2.boundary=\"driven\"", "bodies.2.applied_force=[0.0, -400.0]",
+                           "bodies.2.angular_velocity=1.0"});
+  return load_scene_file(src("verification/soil_forces/bearing_capacity.toml"), sets);
+}
+
 struct ParityScene {
   const char* name;  // a test-name-safe identifier
   Scene (*make)(int steps);
@@ -126,7 +139,8 @@ inline const std::vector<ParityScene>& scenes() {
       {"PolytropeBarnesHut", polytrope_bh},
       {"GranularColumn", granular_column},
       {"GranularColumnCoulomb", granular_column_coulomb},
-      {"EmbryoCollision", embryo_collision}};
+      {"EmbryoCollision", embryo_collision},
+      {"SoilTool", soil_tool}};
   return s;
 }
 
