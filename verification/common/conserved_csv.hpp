@@ -17,18 +17,27 @@ struct ConservedRow {
   double angular_momentum[3];  // likewise (2-D: z only; 1-D: none)
 };
 
-// Column `name` of any CSV file a run writes (conserved.csv,
-// boundary_forces.csv, regions.csv), as numbers, one per row.
-inline std::vector<double> read_csv_column(const std::string& path, const std::string& name) {
-  std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path);
-  std::string line;
-  std::getline(f, line);
+// A run's CSV file opened at its first row: the stream and the header's
+// column names (throws naming the file when it cannot be read).
+struct CsvFile {
+  std::ifstream f;
   std::vector<std::string> cols;
-  {
+  explicit CsvFile(const std::string& path) : f(path) {
+    if (!f) throw std::runtime_error("cannot read " + path);
+    std::string line;
+    std::getline(f, line);
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
   }
+};
+
+// Column `name` of any CSV file a run writes (conserved.csv,
+// boundary_forces.csv, regions.csv), as numbers, one per row.
+inline std::vector<double> read_csv_column(const std::string& path, const std::string& name) {
+  CsvFile csv(path);
+  std::ifstream& f = csv.f;
+  const std::vector<std::string>& cols = csv.cols;
+  std::string line;
   const auto it = std::find(cols.begin(), cols.end(), name);
   if (it == cols.end()) throw std::runtime_error(path + ": no column " + name);
   const std::size_t col = std::size_t(it - cols.begin());
@@ -43,16 +52,10 @@ inline std::vector<double> read_csv_column(const std::string& path, const std::s
 }
 
 inline std::vector<ConservedRow> read_conserved_csv(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path);
+  CsvFile csv(path);
+  std::ifstream& f = csv.f;
+  const std::vector<std::string>& cols = csv.cols;
   std::string line;
-  std::getline(f, line);
-  std::vector<std::string> cols;
-  {
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) cols.push_back(c);
-  }
   auto col = [&](const std::string& name) {
     const auto it = std::find(cols.begin(), cols.end(), name);
     if (it == cols.end()) throw std::runtime_error(path + ": no column " + name);
